@@ -1,0 +1,50 @@
+# The README's two commands, for a fresh Debian machine:
+#   make demo   set up .venv, install marchlab, render the classroom scene to out/classroom.png
+#   make test   set up .venv with the test extras and run the whole suite
+# System packages the backends need are installed with apt when missing (root or sudo).
+
+PYTHON ?= python3
+VENV := .venv
+BIN := $(VENV)/bin
+
+# Mesa's EGL and software OpenGL (llvmpipe) for the headless GPU backend.
+SYSTEM_PACKAGES := libegl1 libegl-mesa0 libgl1-mesa-dri
+
+.PHONY: demo test system-packages clean
+
+demo: $(VENV)/.installed
+	$(BIN)/marchlab render classroom -o out/classroom.png
+
+test: $(VENV)/.installed-test
+	$(BIN)/python -m pytest
+
+system-packages:
+	@if ! command -v dpkg-query >/dev/null; then \
+	  echo "not a Debian system: install by hand if missing: $(SYSTEM_PACKAGES)"; exit 0; fi; \
+	missing=""; \
+	for pkg in $(SYSTEM_PACKAGES); do \
+	  dpkg-query -W -f='$${Status}' $$pkg 2>/dev/null | grep -q "ok installed" || missing="$$missing $$pkg"; \
+	done; \
+	if [ -n "$$missing" ]; then \
+	  sudo=""; [ "$$(id -u)" = 0 ] || sudo=sudo; \
+	  echo "installing system packages:$$missing"; \
+	  $$sudo apt-get update -qq && \
+	  DEBIAN_FRONTEND=noninteractive $$sudo apt-get install -y -qq --no-install-recommends $$missing; \
+	fi
+
+$(BIN)/python:
+	@$(PYTHON) -c 'import sys; sys.exit(sys.version_info < (3, 11))' || \
+	  { echo "marchlab needs Python >= 3.11; set PYTHON=python3.11 or newer"; exit 1; }
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install -q --upgrade pip
+
+$(VENV)/.installed: pyproject.toml | $(BIN)/python system-packages
+	$(BIN)/python -m pip install -q -e .
+	touch $@
+
+$(VENV)/.installed-test: pyproject.toml | $(BIN)/python system-packages
+	$(BIN)/python -m pip install -q -e '.[dev]'
+	touch $@
+
+clean:
+	rm -rf $(VENV) out build *.egg-info .pytest_cache .hypothesis

@@ -1,0 +1,129 @@
+"""The ``marchlab`` command: render scenes, list the bundled ones, print a scene file.
+
+A user error (a bad file, field, size or option) ends with one line on stderr and exit code 2;
+anything else is a bug and keeps its traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from contextlib import contextmanager
+from pathlib import Path
+
+from .errors import MarchlabError
+from .frame import AOVS
+from .render import BACKENDS, PRECISIONS, render
+from .scenefile import bundled_scene_names, load_scene, scene_to_toml
+
+OUTPUT_SUFFIXES = (".png", ".npz")
+
+
+class Parser(argparse.ArgumentParser):
+    """argparse, but a usage error is one line (and exit code 2, as argparse does)."""
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
+def parse_size(text: str) -> tuple[int, int]:
+    """``"640x480"`` -> (640, 480)."""
+    try:
+        width, height = (int(part) for part in text.lower().split("x"))
+    except ValueError:
+        width = height = 0
+    if width < 1 or height < 1:
+        raise argparse.ArgumentTypeError(
+            f"expected WIDTHxHEIGHT with positive integers, e.g. 640x480 (got {text!r})")
+    return width, height
+
+
+def build_parser() -> Parser:
+    parser = Parser(prog="marchlab", description="Sphere-tracing teaching toolkit.")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
+
+    p = sub.add_parser("render", help="render a scene to a PNG or .npz file")
+    p.add_argument("scene", help="bundled scene name (see `marchlab scenes`) or a .toml path")
+    p.add_argument("-o", "--output", help="output file, .png or .npz (default: SCENE.png)")
+    p.add_argument("--size", type=parse_size, default=(640, 480), metavar="WxH",
+                   help="image size in pixels (default: 640x480)")
+    p.add_argument("--backend", choices=list(BACKENDS), default="numpy")
+    p.add_argument("--precision", choices=PRECISIONS, default="float64")
+    p.add_argument("--aov", choices=AOVS, default="color",
+                   help="buffer written to a PNG (an .npz holds them all)")
+    p.add_argument("--set", action="append", default=[], metavar="FIELD=VALUE",
+                   help="override a scene field, e.g. render.max_steps=64 (repeatable)")
+    p.set_defaults(func=cmd_render)
+
+    p = sub.add_parser("scenes", help="list the bundled scenes")
+    p.set_defaults(func=cmd_scenes)
+
+    p = sub.add_parser("show", help="print a scene as TOML (a start for your own)")
+    p.add_argument("scene", help="bundled scene name or a .toml path")
+    p.add_argument("--set", action="append", default=[], metavar="FIELD=VALUE")
+    p.set_defaults(func=cmd_show)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return args.func(args) or 0
+    except MarchlabError as err:
+        print(f"marchlab: error: {err}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("marchlab: interrupted", file=sys.stderr)
+        return 130
+
+
+def cmd_render(args) -> int:
+    output = Path(args.output) if args.output else Path(f"{Path(args.scene).stem}.png")
+    if output.suffix.lower() not in OUTPUT_SUFFIXES:
+        raise MarchlabError(f"{output}: unsupported output format {output.suffix!r} "
+                            "(use .png or .npz)")
+    scene = load_scene(args.scene, args.set)
+    width, height = args.size
+    start = time.perf_counter()
+    with progress_bar(width * height) as progress:
+        frame = render(scene, width, height, backend=args.backend, precision=args.precision,
+                       progress=progress)
+    seconds = time.perf_counter() - start
+    try:
+        output.parent.mkdir(parents=True, exist_ok=True)
+        frame.save(output, aov=args.aov)
+    except OSError as err:
+        raise MarchlabError(f"{output}: cannot write: {err.strerror}") from None
+    print(f"wrote {output} ({width}x{height}, {args.backend} {args.precision}, "
+          f"{seconds:.2f} s)")
+    return 0
+
+
+@contextmanager
+def progress_bar(total: int):
+    """A progress callback drawing a bar on stderr, shown only on a terminal after 1 s."""
+    if not sys.stderr.isatty():
+        yield None
+        return
+    from tqdm import tqdm
+    with tqdm(total=total, unit="px", unit_scale=True, delay=1.0, leave=False,
+              file=sys.stderr) as bar:
+        yield lambda done, _total: bar.update(done - bar.n)
+
+
+def cmd_scenes(args) -> int:
+    names = bundled_scene_names()
+    width = max(map(len, names))
+    for name in names:
+        print(f"{name:<{width}}  {load_scene(name).description}")
+    return 0
+
+
+def cmd_show(args) -> int:
+    print(scene_to_toml(load_scene(args.scene, args.set)), end="")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

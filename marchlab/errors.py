@@ -1,0 +1,53 @@
+"""Errors a user can cause, each printed by the CLI as one line and exit code 2.
+
+A `SceneError` knows *where* the problem is: the file, and the field path inside it
+(``objects[2].radius``), so the message can point at the exact line a user must fix.
+"""
+
+from __future__ import annotations
+
+
+class MarchlabError(Exception):
+    """An error caused by the user's input (not a bug): shown as one line, no traceback."""
+
+
+class SceneError(MarchlabError):
+    """A bad value or structure in a scene, located by file and field path.
+
+    Parameters
+    ----------
+    problem : str
+        What is wrong, e.g. ``"must be positive (got -1.0)"``.
+    path : tuple of str or int
+        Field names and list indices from the scene root, e.g. ``("objects", 2, "radius")``.
+    source : str or None
+        The file the scene came from, if any.
+    """
+
+    def __init__(self, problem: str, path: tuple = (), source: str | None = None):
+        self.problem = problem
+        self.path = tuple(path)
+        self.source = source
+        super().__init__(str(self))
+
+    def under(self, *prefix) -> "SceneError":
+        """The same error seen from a parent table: ``prefix`` is prepended to the path."""
+        return SceneError(self.problem, tuple(prefix) + self.path, self.source)
+
+    def in_file(self, source: str) -> "SceneError":
+        return SceneError(self.problem, self.path, source)
+
+    def __str__(self) -> str:
+        parts = [p for p in (self.source, format_path(self.path)) if p]
+        return ": ".join(parts + [self.problem])
+
+
+def format_path(path) -> str:
+    """``("objects", 2, "radius")`` -> ``"objects[2].radius"``."""
+    text = ""
+    for part in path:
+        if isinstance(part, int):
+            text += f"[{part}]"
+        else:
+            text += f".{part}" if text else str(part)
+    return text

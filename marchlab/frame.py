@@ -1,0 +1,109 @@
+"""`Frame`: what every backend returns, one array per output buffer, and how it is saved."""
+
+from __future__ import annotations
+
+import io
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .colormaps import heat
+from .errors import MarchlabError
+from .files import write_atomically
+
+AOVS = ("color", "depth", "normal", "steps")
+
+
+@dataclass
+class Frame:
+    """One rendered image and its auxiliary buffers, for an image of H rows and W columns.
+
+    Attributes
+    ----------
+    color : (H, W, 3) float32 ndarray
+        Linear RGB in [0, 1] (gamma is applied only when saving).
+    depth : (H, W) ndarray
+        Distance t along the primary ray to the hit; inf on a miss.
+    normal : (H, W, 3) ndarray
+        Unit surface normal at the hit; 0 on a miss.
+    steps : (H, W) int32 ndarray
+        SDF evaluations the primary ray took.
+    object_id : (H, W) int32 ndarray
+        Depth-first index of the primitive hit (`marchlab.shapes.primitives`); -1 on a miss.
+    hit : (H, W) bool ndarray
+    gamma : float
+        Display gamma used by `image` and `save`.
+    max_steps : int
+        The march limit, the top of the steps colour scale.
+    backend, precision : str
+        Which renderer made the frame, at which floating-point precision.
+    """
+    color: np.ndarray
+    depth: np.ndarray
+    normal: np.ndarray
+    steps: np.ndarray
+    object_id: np.ndarray
+    hit: np.ndarray
+    gamma: float = 2.2
+    max_steps: int = 256
+    backend: str = ""
+    precision: str = ""
+
+    @property
+    def height(self) -> int:
+        return self.color.shape[0]
+
+    @property
+    def width(self) -> int:
+        return self.color.shape[1]
+
+    def image(self, aov: str = "color") -> np.ndarray:
+        """An 8-bit (H, W, 3) picture of one buffer.
+
+        ``color`` is encoded with the frame's gamma; ``depth`` is grey from white (nearest
+        hit) to black (farthest hit); ``normal`` maps each component from [-1, 1] to [0, 1];
+        ``steps`` uses the heat ramp up to ``max_steps``. Misses are black in depth and normal.
+        """
+        if aov == "color":
+            return to_uint8(self.color ** (1 / self.gamma))
+        if aov == "depth":
+            t = np.where(self.hit, self.depth, np.nan)
+            near, far = (np.nanmin(t), np.nanmax(t)) if self.hit.any() else (0.0, 1.0)
+            grey = np.where(self.hit, 1 - (t - near) / max(far - near, 1e-12), 0)
+            return to_uint8(np.repeat(grey[..., None], 3, axis=-1))
+        if aov == "normal":
+            return to_uint8(np.where(self.hit[..., None], 0.5 + 0.5 * self.normal, 0))
+        if aov == "steps":
+            return to_uint8(heat(self.steps / self.max_steps))
+        raise MarchlabError(f"unknown AOV {aov!r} (one of: {', '.join(AOVS)})")
+
+    def save(self, path, aov: str = "color") -> None:
+        """Write a PNG (8-bit, of ``aov``) or an .npz (every buffer), never half-written."""
+        path = Path(path)
+        buffer = io.BytesIO()
+        if path.suffix.lower() == ".png":
+            from PIL import Image
+            Image.fromarray(self.image(aov)).save(buffer, format="PNG")
+        elif path.suffix.lower() == ".npz":
+            np.savez_compressed(buffer, color=self.color, depth=self.depth, normal=self.normal,
+                                steps=self.steps, object_id=self.object_id, hit=self.hit,
+                                gamma=self.gamma, max_steps=self.max_steps,
+                                backend=self.backend, precision=self.precision)
+        else:
+            raise MarchlabError(f"{path}: unsupported output format {path.suffix!r} "
+                                "(use .png or .npz)")
+        write_atomically(path, buffer.getvalue())
+
+    @classmethod
+    def load(cls, path) -> "Frame":
+        """Read a frame written by ``save(path)`` with an .npz suffix."""
+        with np.load(path) as data:
+            arrays = {k: data[k] for k in ("color", "depth", "normal", "steps", "object_id", "hit")}
+            return cls(**arrays, gamma=float(data["gamma"]), max_steps=int(data["max_steps"]),
+                       backend=str(data["backend"]), precision=str(data["precision"]))
+
+
+def to_uint8(x: np.ndarray) -> np.ndarray:
+    """[0, 1] floats to 0..255, rounding half up: floor(255 x + 0.5)."""
+    return np.floor(np.clip(x, 0, 1) * 255 + 0.5).astype(np.uint8)

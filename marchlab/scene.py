@@ -1,0 +1,205 @@
+"""The scene as plain data: camera, render settings, materials, lights and the SDF tree.
+
+A `Scene` is what every backend reads and none owns. It is immutable: change a copy with
+``dataclasses.replace``. `marchlab.load_scene` / `marchlab.save_scene` move it to and from TOML;
+docs/scene-format.md describes every field (generated from the ``doc`` strings below).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import ClassVar, Literal
+
+from .errors import SceneError
+from .fields import (Color, Record, Vec3, at_least, between, between_open, color_range,
+                     nonnegative, nonzero, param, positive, unit_interval)
+from .shapes import Node, primitives
+
+
+@dataclass(frozen=True)
+class Camera(Record):
+    """A pinhole camera; the ray of each pixel is given in docs/scene-format.md."""
+    position: Vec3 = param((0.0, 1.0, 5.0), "Eye position.")
+    look_at: Vec3 = param((0.0, 0.0, 0.0), "Point the camera looks at.")
+    up: Vec3 = param((0.0, 1.0, 0.0), "Approximate up direction.", nonzero)
+    fov: float = param(60.0, "Vertical field of view in degrees.", between_open(0.0, 180.0))
+
+    def check(self):
+        forward = [a - b for a, b in zip(self.look_at, self.position)]
+        if not any(forward):
+            raise SceneError("must differ from position", ("look_at",))
+        cross = _cross(forward, self.up)
+        if math.hypot(*cross) <= 1e-9 * math.hypot(*forward) * math.hypot(*self.up):
+            raise SceneError("must not be parallel to the view direction", ("up",))
+
+
+def _cross(a, b):
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+
+# --- Materials -------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Checker(Record):
+    """Checkerboard albedo in the xz-plane: squares of side ``scale`` (for floors)."""
+    color_a: Color = param((0.9, 0.9, 0.9), "Colour of the squares where floor(x/s)+floor(z/s) "
+                                            "is even.", color_range)
+    color_b: Color = param((0.2, 0.2, 0.2), "Colour of the other squares.", color_range)
+    scale: float = param(1.0, "Side of a square.", positive)
+
+
+@dataclass(frozen=True)
+class Material(Record):
+    """Phong material (source 000): colour and the ambient/diffuse/specular/mirror weights."""
+    color: Color = param((0.8, 0.8, 0.8), "Albedo (linear RGB).", color_range)
+    ka: float = param(0.1, "Ambient weight.", unit_interval)
+    kd: float = param(0.8, "Diffuse weight.", unit_interval)
+    ks: float = param(0.3, "Specular weight.", unit_interval)
+    shininess: float = param(32.0, "Specular exponent alpha.", positive)
+    kr: float = param(0.0, "Mirror reflectivity: weight of the reflected colour.", unit_interval)
+    checker: Checker | None = param(None, "Optional checker pattern replacing ``color``.")
+
+
+# --- Lights ----------------------------------------------------------------------------------
+
+class Light(Record):
+    """Base of the light types; ``kind`` is the ``type`` in a scene file."""
+    kind: ClassVar[str] = ""
+
+
+@dataclass(frozen=True)
+class PointLight(Light):
+    """Light from a point, fading as 1 / (constant + linear d + quadratic d^2) (source 003)."""
+    kind: ClassVar[str] = "point"
+    position: Vec3 = param((0.0, 5.0, 0.0), "Position.")
+    color: Color = param((1.0, 1.0, 1.0), "Colour.", color_range)
+    intensity: float = param(1.0, "Multiplier of the colour.", nonnegative)
+    constant: float = param(1.0, "Constant attenuation term.", nonnegative)
+    linear: float = param(0.0, "Linear attenuation term.", nonnegative)
+    quadratic: float = param(0.0, "Quadratic attenuation term.", nonnegative)
+
+    def check(self):
+        _check_attenuation(self)
+
+
+@dataclass(frozen=True)
+class DirectionalLight(Light):
+    """Light from infinitely far away, travelling along ``direction`` (like the sun)."""
+    kind: ClassVar[str] = "directional"
+    direction: Vec3 = param((-0.4, -1.0, -0.6), "Direction the light travels in.", nonzero)
+    color: Color = param((1.0, 1.0, 1.0), "Colour.", color_range)
+    intensity: float = param(1.0, "Multiplier of the colour.", nonnegative)
+
+
+@dataclass(frozen=True)
+class SpotLight(Light):
+    """Point light limited to a cone with a soft edge between two angles (source 003)."""
+    kind: ClassVar[str] = "spot"
+    position: Vec3 = param((0.0, 5.0, 0.0), "Position.")
+    direction: Vec3 = param((0.0, -1.0, 0.0), "Axis of the cone, away from the light.", nonzero)
+    color: Color = param((1.0, 1.0, 1.0), "Colour.", color_range)
+    intensity: float = param(1.0, "Multiplier of the colour.", nonnegative)
+    inner_angle: float = param(20.0, "Half-angle in degrees inside which the light is full.",
+                               between(0.0, 89.0))
+    outer_angle: float = param(30.0, "Half-angle in degrees outside which the light is zero.",
+                               between_open(0.0, 90.0))
+    constant: float = param(1.0, "Constant attenuation term.", nonnegative)
+    linear: float = param(0.0, "Linear attenuation term.", nonnegative)
+    quadratic: float = param(0.0, "Quadratic attenuation term.", nonnegative)
+
+    def check(self):
+        if self.inner_angle >= self.outer_angle:
+            raise SceneError(f"must be less than outer_angle {self.outer_angle} "
+                             f"(got {self.inner_angle})", ("inner_angle",))
+        _check_attenuation(self)
+
+
+def _check_attenuation(light):
+    if light.constant + light.linear + light.quadratic <= 0:
+        raise SceneError("constant, linear and quadratic must not all be 0", ("constant",))
+
+
+# --- Background, fog, render settings ----------------------------------------------------------
+
+class Background(Record):
+    """Base of the background types: what a ray that hits nothing sees."""
+    kind: ClassVar[str] = ""
+
+
+@dataclass(frozen=True)
+class SolidBackground(Background):
+    """One colour everywhere."""
+    kind: ClassVar[str] = "solid"
+    color: Color = param((0.0, 0.0, 0.0), "Colour.", color_range)
+
+
+@dataclass(frozen=True)
+class SkyBackground(Background):
+    """Vertical gradient: ``bottom`` looking straight down, ``top`` looking straight up."""
+    kind: ClassVar[str] = "sky"
+    bottom: Color = param((0.85, 0.9, 1.0), "Colour for a ray pointing straight down.",
+                          color_range)
+    top: Color = param((0.35, 0.55, 0.9), "Colour for a ray pointing straight up.", color_range)
+
+
+@dataclass(frozen=True)
+class Fog(Record):
+    """Exponential distance fog: colour mixed in by 1 - exp(-density t)."""
+    color: Color = param((0.8, 0.85, 0.9), "Fog colour.", color_range)
+    density: float = param(0.0, "Extinction per unit distance (0: no fog).", nonnegative)
+
+
+Shading = Literal["phong", "blinn_phong", "toon", "normals", "depth", "steps"]
+
+
+@dataclass(frozen=True)
+class RenderSettings(Record):
+    """How rays are marched and shaded; every backend honours these identically."""
+    max_steps: int = param(256, "Most SDF evaluations along one ray.", at_least(1))
+    epsilon: float = param(1e-3, "A ray hits where |distance| < epsilon.", positive)
+    max_distance: float = param(100.0, "A ray misses beyond this distance.", positive)
+    normal_method: Literal["central", "tetrahedron"] = param(
+        "central", "Gradient estimate: central differences (6 evaluations) or Quilez's "
+                   "tetrahedron (4).")
+    normal_step: float = param(1e-3, "Finite-difference step h of the normal estimate.",
+                               positive)
+    shadows: Literal["none", "hard", "soft"] = param("none", "Shadow rays toward each light.")
+    penumbra_k: float = param(8.0, "Soft shadows: sharpness k of the penumbra (larger: harder).",
+                              positive)
+    surface_offset: float = param(0.01, "Secondary rays start this far out along the normal.",
+                                  nonnegative)
+    reflection_depth: int = param(0, "Mirror bounces after the first hit.", between(0, 16))
+    shading: Shading = param("phong", "Shading mode.")
+    toon_bands: int = param(4, "Toon shading: number of brightness bands.", at_least(2))
+    ambient: Color = param((1.0, 1.0, 1.0), "Ambient light colour i_a.", color_range)
+    gamma: float = param(2.2, "Display gamma applied when an image is saved.", positive)
+    fog: Fog = param(factory=Fog, doc="Distance fog.")
+    background: Background = param(factory=SkyBackground, doc="What a miss sees.")
+
+
+def _default_lights():
+    return (DirectionalLight(),)
+
+
+def _default_materials():
+    return {"default": Material()}
+
+
+@dataclass(frozen=True)
+class Scene(Record):
+    """Everything a renderer needs. ``objects`` are joined by union."""
+    description: str = param("", "One line shown by ``marchlab scenes``.")
+    camera: Camera = param(factory=Camera, doc="The camera.")
+    render: RenderSettings = param(factory=RenderSettings, doc="Render settings.")
+    materials: dict[str, Material] = param(factory=_default_materials,
+                                           doc="Materials by name.")
+    lights: tuple[Light, ...] = param(factory=_default_lights, doc="Light sources.")
+    objects: tuple[Node, ...] = param((), "The shapes; their union is the scene.")
+
+    def check(self):
+        for index, prim in enumerate(primitives(self.objects)):
+            if prim.material not in self.materials:
+                known = ", ".join(sorted(self.materials)) or "none"
+                raise SceneError(f"primitive {index} ({prim.kind}) uses unknown material "
+                                 f"{prim.material!r} (defined: {known})", ("materials",))

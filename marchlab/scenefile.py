@@ -1,0 +1,289 @@
+"""Scenes to and from TOML files (read with `tomllib`, written with `tomlkit`).
+
+The file mirrors the dataclasses of `marchlab.scene` one table per record, with a ``type`` key
+where a field can hold several classes (objects, lights, background). One shorthand keeps files
+short: any object table may carry ``position``, ``rotation`` and ``scale``, which mean
+``translate(rotate(scale(node)))``. Saving writes that shorthand wherever it applies, so
+``load_scene(p) == scene`` after ``save_scene(scene, p)``.
+
+Every error names the file and the path of the field inside it (``objects[2].radius``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import os
+import re
+import tomllib
+import typing
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import tomlkit
+
+from .errors import SceneError
+from .fields import field_types
+from .files import write_atomically
+from .scene import Background, Light, Material, Scene
+from .shapes import Node, Primitive, Rotate, Scale, Translate, node_kinds
+
+# Shorthand keys on an object table, outermost first, and the transform each one stands for.
+SHORTHAND = {"position": (Translate, "offset"), "rotation": (Rotate, "degrees"),
+             "scale": (Scale, "factor")}
+
+POLYMORPHIC = {Node: node_kinds, Light: lambda: _kinds(Light),
+               Background: lambda: _kinds(Background)}
+
+
+def _kinds(base) -> dict[str, type]:
+    return {cls.kind: cls for cls in base.__subclasses__()}
+
+
+# --- Reading ---------------------------------------------------------------------------------
+
+def bundled_scene_names() -> list[str]:
+    """Names of the scenes shipped in marchlab/scenes/."""
+    folder = resources.files("marchlab") / "scenes"
+    return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml"))
+
+
+def scene_path(name_or_path: str | os.PathLike) -> Path:
+    """The file of a bundled scene's name, or the path itself if it names a file."""
+    path = Path(name_or_path)
+    if path.is_file():
+        return path
+    bundled = resources.files("marchlab") / "scenes" / f"{name_or_path}.toml"
+    if path.suffix == "" and bundled.is_file():
+        return Path(str(bundled))
+    names = ", ".join(bundled_scene_names())
+    raise SceneError(f"no such file or bundled scene (bundled: {names})", (),
+                     str(name_or_path))
+
+
+def load_scene(name_or_path: str | os.PathLike, overrides: list[str] = ()) -> Scene:
+    """Read a scene from a bundled name (``"classroom"``) or a TOML file path.
+
+    ``overrides`` are ``"field.path=value"`` strings applied before validation, as by the CLI's
+    ``--set render.max_steps=64``.
+    """
+    path = scene_path(name_or_path)
+    source = str(name_or_path) if path.suffix == "" else str(path)
+    try:
+        with open(path, "rb") as fh:
+            data = tomllib.load(fh)
+    except tomllib.TOMLDecodeError as err:
+        raise SceneError(f"TOML syntax error: {err}", (), source) from None
+    except OSError as err:
+        raise SceneError(f"cannot read: {err.strerror}", (), source) from None
+    try:
+        for assignment in overrides:
+            apply_override(data, assignment)
+        return scene_from_dict(data)
+    except SceneError as err:
+        raise err.in_file(source) from None
+
+
+def scene_from_dict(data: dict) -> Scene:
+    """Build and validate a `Scene` from the dictionary a TOML file parses to."""
+    materials = data.get("materials", {"default": None})
+    return _record(Scene, data, (), frozenset(materials) if isinstance(materials, dict) else None)
+
+
+def _record(cls, table: Any, path: tuple, materials) -> Any:
+    """Build the record ``cls`` from a TOML table, converting nested tables first."""
+    if not isinstance(table, dict):
+        raise SceneError(f"must be a table (got {type(table).__name__})", path)
+    hints = field_types(cls)
+    names = {f.name for f in dataclasses.fields(cls)}
+    allowed = names | ({"type"} if _base(cls) else set())
+    if issubclass(cls, Node):
+        allowed |= set(SHORTHAND)
+    for key in table:
+        if key not in allowed:
+            close = difflib.get_close_matches(key, sorted(allowed), n=1)
+            hint = f" (did you mean {close[0]!r}?)" if close else ""
+            raise SceneError(f"unknown key{hint}", path + (key,))
+    kwargs = {}
+    for f in dataclasses.fields(cls):
+        if f.name in table:
+            kwargs[f.name] = _value(hints[f.name], table[f.name], path + (f.name,), materials)
+        elif f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:
+            raise SceneError(f"missing key {f.name!r}", path)
+    if issubclass(cls, Primitive) and materials is not None:
+        name = kwargs.get("material", "default")
+        if isinstance(name, str) and name not in materials:
+            known = ", ".join(sorted(materials)) or "none"
+            raise SceneError(f"unknown material {name!r} (defined: {known})",
+                             path + ("material",))
+    try:
+        record = cls(**kwargs)
+    except SceneError as err:
+        raise err.under(*path) from None
+    if issubclass(cls, Node):
+        record = _expand_shorthand(record, table, path)
+    return record
+
+
+def _value(hint, value, path: tuple, materials):
+    """Convert nested tables and arrays of tables; leave scalars to the record's own checks."""
+    origin, args = typing.get_origin(hint), typing.get_args(hint)
+    if _is_record(hint):
+        return _record(hint, value, path, materials)
+    if hint in POLYMORPHIC:
+        return _record(_pick(hint, value, path), value, path, materials)
+    if origin is tuple and args[-1] is Ellipsis and isinstance(value, list):
+        return tuple(_value(args[0], v, path + (i,), materials) for i, v in enumerate(value))
+    if origin is dict and isinstance(value, dict):
+        return {k: _value(args[1], v, path + (k,), materials) for k, v in value.items()}
+    if type(None) in args:
+        (inner,) = [a for a in args if a is not type(None)]
+        return _value(inner, value, path, materials)
+    return value
+
+
+def _is_record(hint) -> bool:
+    return isinstance(hint, type) and dataclasses.is_dataclass(hint)
+
+
+def _base(cls):
+    return next((b for b in POLYMORPHIC if issubclass(cls, b)), None)
+
+
+def _pick(base, table, path) -> type:
+    """The concrete class a table's ``type`` key names."""
+    if not isinstance(table, dict):
+        raise SceneError(f"must be a table (got {type(table).__name__})", path)
+    kinds = POLYMORPHIC[base]()
+    if "type" not in table:
+        raise SceneError(f"missing key 'type' (one of: {', '.join(sorted(kinds))})", path)
+    kind = table["type"]
+    if kind not in kinds:
+        close = difflib.get_close_matches(str(kind), sorted(kinds), n=1)
+        hint = f"did you mean {close[0]!r}?" if close else f"one of: {', '.join(sorted(kinds))}"
+        raise SceneError(f"unknown type {kind!r} ({hint})", path + ("type",))
+    return kinds[kind]
+
+
+def _expand_shorthand(node: Node, table: dict, path: tuple) -> Node:
+    """Wrap ``node`` in the transforms its shorthand keys ask for (innermost: scale)."""
+    for key in reversed(SHORTHAND):
+        if key in table:
+            cls, field = SHORTHAND[key]
+            try:
+                node = cls(node, table[key])
+            except SceneError as err:
+                raise SceneError(err.problem, path + (key,) + err.path[1:]) from None
+    return node
+
+
+# --- Overrides (--set) -------------------------------------------------------------------------
+
+_STEP = re.compile(r"(\.?)([A-Za-z_][A-Za-z0-9_-]*)|\[(\d+)\]")
+
+
+def apply_override(data: dict, assignment: str) -> None:
+    """Apply ``"render.max_steps=64"`` or ``"objects[2].radius=0.5"`` to a parsed scene file.
+
+    The value is read as TOML (``[1, 2, 3]``, ``true``, ``"text"``); a bare word that is not
+    TOML is taken as a string, so ``render.shading=toon`` works.
+    """
+    key, sep, text = assignment.partition("=")
+    key = key.strip()
+    steps, pos = [], 0
+    while pos < len(key):
+        match = _STEP.match(key, pos)
+        if not match or (match.group(1) == "") != (pos == 0) and match.group(2):
+            raise SceneError(f"--set {assignment!r}: cannot read the field path {key!r}")
+        steps.append(match.group(2) if match.group(2) else int(match.group(3)))
+        pos = match.end()
+    if not sep or not steps or isinstance(steps[0], int):
+        raise SceneError(f"--set {assignment!r}: expected FIELD.PATH=VALUE, "
+                         "e.g. render.max_steps=64")
+    try:
+        value = tomllib.loads(f"v = {text.strip()}")["v"]
+    except tomllib.TOMLDecodeError:
+        value = text.strip()
+    target = data
+    for i, step in enumerate(steps[:-1]):
+        here = tuple(steps[:i + 1])
+        if isinstance(step, int):
+            if not isinstance(target, list) or step >= len(target):
+                size = len(target) if isinstance(target, list) else 0
+                raise SceneError(f"no such entry (there are {size})", here)
+            target = target[step]
+        else:
+            if not isinstance(target, dict):
+                raise SceneError("is not a table", here[:-1])
+            target = target.setdefault(step, {})
+    last = steps[-1]
+    if isinstance(last, int):
+        if not isinstance(target, list) or last >= len(target):
+            raise SceneError("no such entry", tuple(steps))
+        target[last] = value
+    elif isinstance(target, dict):
+        target[last] = value
+    else:
+        raise SceneError("is not a table", tuple(steps[:-1]))
+
+
+# --- Writing ---------------------------------------------------------------------------------
+
+def scene_to_dict(scene: Scene) -> dict:
+    """The dictionary a scene is saved as (the inverse of `scene_from_dict`)."""
+    return _table(scene)
+
+
+def _table(record) -> dict:
+    if isinstance(record, Node):
+        return _node_table(record)
+    out = {"type": record.kind} if _base(type(record)) else {}
+    for f in dataclasses.fields(record):
+        value = _plain(getattr(record, f.name))
+        if value is not None:
+            out[f.name] = value
+    return out
+
+
+def _plain(value):
+    if dataclasses.is_dataclass(value):
+        return _table(value)
+    if isinstance(value, tuple):
+        return [_plain(v) for v in value]
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    return value
+
+
+def _node_table(node: Node) -> dict:
+    """A node's table, with an outer translate/rotate/scale chain written as shorthand."""
+    shorthand = {}
+    for key, (cls, field) in SHORTHAND.items():
+        if type(node) is cls:
+            shorthand[key] = _plain(getattr(node, field))
+            node = node.child
+    out = {"type": node.kind}
+    for f in dataclasses.fields(node):
+        value = _plain(getattr(node, f.name))
+        if value is not None:
+            out[f.name] = value
+    out.update(shorthand)
+    return out
+
+
+def save_scene(scene: Scene, path: str | os.PathLike) -> None:
+    """Write ``scene`` as TOML; the file appears whole or not at all."""
+    write_atomically(path, scene_to_toml(scene).encode())
+
+
+def scene_to_toml(scene: Scene) -> str:
+    """The TOML text of a scene, top level in reading order: description, camera, ... objects."""
+    data = scene_to_dict(scene)
+    doc = tomlkit.document()
+    doc.add(tomlkit.comment("marchlab scene (docs/scene-format.md describes every field)"))
+    for key in ("description", "camera", "render", "materials", "lights", "objects"):
+        if key in data:
+            doc.add(key, data[key])
+    return tomlkit.dumps(doc)
+

@@ -1,0 +1,275 @@
+"""The scene's SDF tree as plain data: primitives, CSG operators and transforms.
+
+These classes hold parameters only. The distance formulas live in each backend under the same
+names (``sdf_sphere`` in reference_cpu/sdf.py, later in GLSL and OpenCL C). Each node type has a
+``kind``, the ``type`` it is given in a scene file. Python operators build trees:
+``a | b`` (union), ``a & b`` (intersection), ``a - b`` (subtraction).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import ClassVar, Iterator
+
+from .errors import SceneError
+from .fields import Int3, Record, Vec3, nonnegative_vector, nonzero, param, positive, show
+
+
+def all_positive(v) -> str | None:
+    return None if all(c > 0 for c in v) else "components must be positive"
+
+
+class Node(Record):
+    """Base of every node of the SDF tree; carries the builder's operators."""
+
+    kind: ClassVar[str] = ""
+
+    # CSG: Python's set operators, as in fogleman/sdf.
+    def __or__(self, other: Node) -> Node:
+        return Union(_flat(Union, self) + _flat(Union, other))
+
+    def __and__(self, other: Node) -> Node:
+        return Intersection(_flat(Intersection, self) + _flat(Intersection, other))
+
+    def __sub__(self, other: Node) -> Node:
+        return Subtraction((self, other))
+
+    def smooth_union(self, other: Node, k: float) -> Node:
+        return SmoothUnion((self, other), k)
+
+    def smooth_intersection(self, other: Node, k: float) -> Node:
+        return SmoothIntersection((self, other), k)
+
+    def smooth_subtraction(self, other: Node, k: float) -> Node:
+        return SmoothSubtraction((self, other), k)
+
+    # Transforms wrap the node; they apply in the order written, like matrix products read
+    # right to left: ``box.rotate(0, 45, 0).at(0, 1, 0)`` turns the box, then moves it.
+    def at(self, x: float, y: float, z: float) -> Node:
+        return Translate(self, (x, y, z))
+
+    translate = at
+
+    def rotate(self, x: float = 0.0, y: float = 0.0, z: float = 0.0) -> Node:
+        return Rotate(self, (x, y, z))
+
+    def scale(self, factor: float) -> Node:
+        return Scale(self, factor)
+
+    def repeat(self, period, count=None) -> Node:
+        return Repeat(self, period, count)
+
+
+def _flat(cls, node: Node) -> tuple[Node, ...]:
+    """Children of ``node`` if it is already a ``cls`` (so ``a | b | c`` is one union)."""
+    return node.children if type(node) is cls else (node,)
+
+
+# --- Primitives ----------------------------------------------------------------------------
+# Exact SDFs from Inigo Quilez, "Distance functions" (iquilezles.org/articles/distfunctions).
+# Every primitive is centred on its local origin; move it with translate/rotate/scale.
+
+@dataclass(frozen=True)
+class Primitive(Node):
+    """A leaf of the tree: a shape with a material. Its object id is its depth-first index."""
+
+    material: str = param("default", "Name of a material in the scene's [materials] table.",
+                          kw_only=True)
+
+
+@dataclass(frozen=True)
+class Sphere(Primitive):
+    """Sphere of ``radius`` around the origin."""
+    kind: ClassVar[str] = "sphere"
+    radius: float = param(1.0, "Radius.", positive)
+
+
+@dataclass(frozen=True)
+class Box(Primitive):
+    """Axis-aligned box from ``-half_size`` to ``+half_size``."""
+    kind: ClassVar[str] = "box"
+    half_size: Vec3 = param((0.5, 0.5, 0.5), "Half the box's extent along x, y, z.", all_positive)
+
+
+@dataclass(frozen=True)
+class RoundBox(Primitive):
+    """Box with edges rounded by ``radius``; its outer extent is still ``half_size``."""
+    kind: ClassVar[str] = "round_box"
+    half_size: Vec3 = param((0.5, 0.5, 0.5), "Half the box's extent along x, y, z.", all_positive)
+    radius: float = param(0.1, "Radius of the rounded edges.", positive)
+
+    def check(self):
+        if self.radius > min(self.half_size):
+            raise SceneError(f"must not exceed the smallest half_size component "
+                             f"{show(min(self.half_size))} (got {show(self.radius)})", ("radius",))
+
+
+@dataclass(frozen=True)
+class Plane(Primitive):
+    """Half-space below the plane ``normal . x = offset``; the normal points out of the solid."""
+    kind: ClassVar[str] = "plane"
+    normal: Vec3 = param((0.0, 1.0, 0.0), "Outward normal (normalised when evaluated).", nonzero)
+    offset: float = param(0.0, "Distance of the plane from the origin along the normal.")
+
+
+@dataclass(frozen=True)
+class Torus(Primitive):
+    """Torus in the xz-plane: a circle of ``major_radius`` swept by a disc of ``minor_radius``."""
+    kind: ClassVar[str] = "torus"
+    major_radius: float = param(1.0, "Radius of the ring's centre line.", positive)
+    minor_radius: float = param(0.25, "Radius of the tube.", positive)
+
+
+@dataclass(frozen=True)
+class CappedCylinder(Primitive):
+    """Solid cylinder along y, from ``-half_height`` to ``+half_height``."""
+    kind: ClassVar[str] = "capped_cylinder"
+    radius: float = param(0.5, "Radius.", positive)
+    half_height: float = param(0.5, "Half the height.", positive)
+
+
+@dataclass(frozen=True)
+class Capsule(Primitive):
+    """All points within ``radius`` of the segment from ``a`` to ``b``."""
+    kind: ClassVar[str] = "capsule"
+    a: Vec3 = param((0.0, -0.5, 0.0), "One end of the segment.")
+    b: Vec3 = param((0.0, 0.5, 0.0), "The other end of the segment.")
+    radius: float = param(0.25, "Radius.", positive)
+
+    def check(self):
+        if self.a == self.b:
+            raise SceneError("must differ from a (a capsule with a == b is a sphere)", ("b",))
+
+
+@dataclass(frozen=True)
+class Cone(Primitive):
+    """Solid cone along y: base disc of ``radius`` at y = 0, apex at y = ``height``."""
+    kind: ClassVar[str] = "cone"
+    radius: float = param(0.5, "Radius of the base.", positive)
+    height: float = param(1.0, "Height of the apex above the base.", positive)
+
+
+# --- CSG operators -----------------------------------------------------------------------
+
+def at_least_one(children) -> str | None:
+    return None if len(children) >= 1 else "must have at least one child"
+
+
+@dataclass(frozen=True)
+class Union(Node):
+    """min of the children's distances."""
+    kind: ClassVar[str] = "union"
+    children: tuple[Node, ...] = param(doc="The shapes joined.", check=at_least_one)
+
+
+@dataclass(frozen=True)
+class Intersection(Node):
+    """max of the children's distances."""
+    kind: ClassVar[str] = "intersection"
+    children: tuple[Node, ...] = param(doc="The shapes intersected.", check=at_least_one)
+
+
+@dataclass(frozen=True)
+class Subtraction(Node):
+    """The first child minus all others: max(d0, -d1, -d2, ...)."""
+    kind: ClassVar[str] = "subtraction"
+    children: tuple[Node, ...] = param(doc="The shape, then what is cut from it.",
+                                       check=at_least_one)
+
+
+@dataclass(frozen=True)
+class SmoothUnion(Node):
+    """Union blended over a width ``k`` (Quilez's polynomial smooth minimum)."""
+    kind: ClassVar[str] = "smooth_union"
+    children: tuple[Node, ...] = param(doc="The shapes joined, left to right.",
+                                       check=at_least_one)
+    k: float = param(0.25, "Width of the blend.", positive)
+
+
+@dataclass(frozen=True)
+class SmoothIntersection(Node):
+    """Intersection blended over a width ``k``."""
+    kind: ClassVar[str] = "smooth_intersection"
+    children: tuple[Node, ...] = param(doc="The shapes intersected, left to right.",
+                                       check=at_least_one)
+    k: float = param(0.25, "Width of the blend.", positive)
+
+
+@dataclass(frozen=True)
+class SmoothSubtraction(Node):
+    """The first child minus the others, blended over a width ``k``."""
+    kind: ClassVar[str] = "smooth_subtraction"
+    children: tuple[Node, ...] = param(doc="The shape, then what is cut from it.",
+                                       check=at_least_one)
+    k: float = param(0.25, "Width of the blend.", positive)
+
+
+# --- Transforms ----------------------------------------------------------------------------
+# A transform maps the query point into the child's frame (the inverse of moving the shape).
+
+@dataclass(frozen=True)
+class Translate(Node):
+    """The child moved by ``offset``."""
+    kind: ClassVar[str] = "translate"
+    child: Node = param(doc="The shape moved.")
+    offset: Vec3 = param((0.0, 0.0, 0.0), "Displacement.")
+
+
+@dataclass(frozen=True)
+class Rotate(Node):
+    """The child turned by Euler angles in degrees: R = Rz(z) Ry(y) Rx(x) (source 000)."""
+    kind: ClassVar[str] = "rotate"
+    child: Node = param(doc="The shape rotated.")
+    degrees: Vec3 = param((0.0, 0.0, 0.0), "Angles about x, y and z in degrees.")
+
+
+@dataclass(frozen=True)
+class Scale(Node):
+    """The child scaled uniformly by ``factor`` (the distance is multiplied back)."""
+    kind: ClassVar[str] = "scale"
+    child: Node = param(doc="The shape scaled.")
+    factor: float = param(1.0, "Uniform scale factor.", positive)
+
+
+@dataclass(frozen=True)
+class Repeat(Node):
+    """Copies of the child every ``period`` along each axis whose period is not 0.
+
+    With ``count``, only the copies at cell indices -count..+count along each axis exist
+    (Quilez's limited repetition); without it the repetition is infinite.
+    """
+    kind: ClassVar[str] = "repeat"
+    child: Node = param(doc="The shape repeated.")
+    period: Vec3 = param((1.0, 1.0, 1.0), "Spacing of the copies along x, y, z (0: no repeat).",
+                         lambda v: nonnegative_vector(v) or nonzero(v))
+    count: Int3 | None = param(None, "Copies on each side of the original along x, y, z; "
+                                     "absent for infinite repetition.", nonnegative_vector)
+
+
+def children(node: Node) -> tuple[Node, ...]:
+    """The direct children of a node (none for a primitive)."""
+    if hasattr(node, "children"):
+        return node.children
+    if hasattr(node, "child"):
+        return (node.child,)
+    return ()
+
+
+def primitives(nodes) -> Iterator[Primitive]:
+    """The primitives under ``nodes`` in depth-first order; a primitive's object id is its index."""
+    for node in nodes:
+        if isinstance(node, Primitive):
+            yield node
+        else:
+            yield from primitives(children(node))
+
+
+def node_kinds() -> dict[str, type[Node]]:
+    """Every concrete node class by its ``kind``."""
+    found, stack = {}, [Node]
+    while stack:
+        cls = stack.pop()
+        stack.extend(cls.__subclasses__())
+        if cls.kind:
+            found[cls.kind] = cls
+    return found

@@ -1,0 +1,183 @@
+"""The NumPy reference renderer: the whole pipeline, from camera rays to a `Frame`.
+
+For each pixel: march the primary ray; at a hit, estimate the normal, look up the material,
+gather the light from every light (with shadow rays), shade, add fog; then, while the surface
+is a mirror and bounces remain, reflect the ray and repeat, weighting each bounce's colour by
+the product of the kr seen so far (source 000's iterative loop). A ray that hits nothing sees
+the background.
+
+Rays are processed in blocks of whole rows, so memory stays bounded and progress can be shown.
+"""
+
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+
+from marchlab.camera import camera_rays
+from marchlab.frame import Frame
+from marchlab.scene import Checker, Scene
+from marchlab.shapes import primitives
+
+from . import shading
+from .lights import light_at
+from .march import march
+from .normals import estimate_normal
+from .scene_sdf import build_scene_sdf
+from .shadows import hard_shadow, soft_shadow
+
+BLOCK_RAYS = 1 << 16     # rays per block: large enough to amortise NumPy's per-call overhead
+
+AOV_MODES = ("normals", "depth", "steps")
+
+
+def render(scene: Scene, width: int, height: int, precision: str = "float64",
+           progress: Callable[[int, int], None] | None = None) -> Frame:
+    """Render ``scene`` at ``width`` x ``height`` pixels in float32 or float64.
+
+    ``progress(done, total)`` is called after each block of rays, if given.
+    """
+    dtype = np.dtype(precision)
+    tracer = Tracer(scene, dtype)
+    origin, directions = camera_rays(scene.camera, width, height, dtype)
+    directions = directions.reshape(-1, 3)
+    n = len(directions)
+    out = {
+        "color": np.zeros((n, 3), np.float32), "depth": np.full(n, np.inf, dtype),
+        "normal": np.zeros((n, 3), dtype), "steps": np.zeros(n, np.int32),
+        "object_id": np.full(n, -1, np.int32), "hit": np.zeros(n, bool),
+    }
+    block = max(1, BLOCK_RAYS // width) * width
+    for start in range(0, n, block):
+        rows = slice(start, min(start + block, n))
+        for name, values in tracer.trace(origin, directions[rows]).items():
+            out[name][rows] = values
+        if progress is not None:
+            progress(rows.stop, n)
+    shape = {"color": (height, width, 3), "normal": (height, width, 3)}
+    arrays = {k: v.reshape(shape.get(k, (height, width))) for k, v in out.items()}
+    return Frame(**arrays, gamma=scene.render.gamma, max_steps=scene.render.max_steps,
+                 backend="numpy", precision=dtype.name)
+
+
+class Tracer:
+    """A scene prepared for tracing in one precision: its SDFs and per-primitive material tables."""
+
+    def __init__(self, scene: Scene, dtype: np.dtype):
+        self.scene, self.settings, self.dtype = scene, scene.render, dtype
+        self.sdf = build_scene_sdf(scene.objects, dtype)
+        self.sdf_ids = build_scene_sdf(scene.objects, dtype, with_ids=True)
+        # Material parameters per primitive, indexed by object id (like a shader's UBO).
+        mats = [scene.materials[p.material] for p in primitives(scene.objects)]
+        table = lambda values: np.asarray(values, dtype=np.float64).astype(dtype)
+        self.color = table([m.color for m in mats]).reshape(-1, 3)
+        self.ka, self.kd, self.ks, self.kr = (table([getattr(m, k) for m in mats])
+                                              for k in ("ka", "kd", "ks", "kr"))
+        self.shininess = table([m.shininess for m in mats])
+        self.has_checker = np.array([m.checker is not None for m in mats], dtype=bool)
+        checkers = [m.checker or Checker() for m in mats]    # unused where has_checker is False
+        self.checker_a = table([c.color_a for c in checkers]).reshape(-1, 3)
+        self.checker_b = table([c.color_b for c in checkers]).reshape(-1, 3)
+        self.checker_scale = table([c.scale for c in checkers])
+
+    # --- one block of primary rays --------------------------------------------------------
+
+    def trace(self, origin, directions) -> dict[str, np.ndarray]:
+        s = self.settings
+        t, steps, hit = march(origin, directions, self.sdf, s.max_steps, s.epsilon,
+                              s.max_distance)
+        p = origin + t[hit, None] * directions[hit]
+        normal = np.zeros_like(directions)
+        normal[hit] = estimate_normal(self.sdf, p, self.dtype.type(s.normal_step),
+                                      s.normal_method)
+        object_id = np.full(len(directions), -1, np.int32)
+        object_id[hit] = self.sdf_ids(p)[1]
+
+        if s.shading == "steps":
+            color = shading.shade_steps(steps, s.max_steps)
+        elif s.shading in AOV_MODES:
+            color = np.array(shading.background(directions, s.background))
+            color[hit] = (shading.shade_normals(normal[hit]) if s.shading == "normals"
+                          else shading.shade_depth(t[hit], s.max_distance))
+        else:
+            color = self.lit_color(origin, directions, t, hit, normal, object_id)
+        return {"color": np.clip(color, 0, 1), "depth": t, "normal": normal, "steps": steps,
+                "object_id": object_id, "hit": hit}
+
+    def lit_color(self, origin, directions, t, hit, normal, object_id):
+        """Shaded colour with fog and mirror bounces (source 000's iterative reflection loop)."""
+        s = self.settings
+        color = np.zeros(directions.shape, dtype=self.dtype)
+        weight = np.ones(len(directions), dtype=self.dtype)   # product of kr so far
+        ray = np.arange(len(directions))                      # which pixel each ray serves
+        o = np.broadcast_to(origin, directions.shape)
+        d = directions
+        for bounce in range(s.reflection_depth + 1):
+            if bounce > 0:
+                t, _, hit = march(o, d, self.sdf, s.max_steps, s.epsilon, s.max_distance)
+                p = o[hit] + t[hit, None] * d[hit]
+                normal = estimate_normal(self.sdf, p, self.dtype.type(s.normal_step),
+                                         s.normal_method)
+                ids = self.sdf_ids(p)[1]
+            else:
+                p = o[hit] + t[hit, None] * d[hit]
+                normal, ids = normal[hit], object_id[hit]
+            miss = ~hit
+            color[ray[miss]] += weight[miss, None] * shading.background(d[miss], s.background)
+
+            surface = self.surface(p, normal, -d[hit], ids)
+            shaded = self.shade(surface)
+            if s.fog.density > 0:
+                shaded = shading.apply_fog(shaded, t[hit], np.asarray(s.fog.color, self.dtype),
+                                           self.dtype.type(s.fog.density))
+            color[ray[hit]] += weight[hit, None] * shaded
+
+            # Continue only the rays that hit a mirror: start just off the surface.
+            weight = weight[hit] * self.kr[ids]
+            go = weight > 0
+            if bounce == s.reflection_depth or not go.any():
+                break
+            ray, weight = ray[hit][go], weight[go]
+            o = p[go] + self.dtype.type(s.surface_offset) * normal[go]
+            d = shading.reflect(d[hit][go], normal[go])
+        return color
+
+    def surface(self, p, normal, view, ids) -> shading.Surface:
+        """Gather the material of each hit point by its object id."""
+        albedo = self.color[ids]
+        checkered = self.has_checker[ids]
+        if checkered.any():
+            albedo[checkered] = shading.checker(
+                p[checkered], self.checker_a[ids[checkered]], self.checker_b[ids[checkered]],
+                self.checker_scale[ids[checkered]])
+        return shading.Surface(p, normal, view, albedo, self.ka[ids], self.kd[ids],
+                               self.ks[ids], self.shininess[ids])
+
+    def shade(self, surface: shading.Surface):
+        """The shading model of the render settings, given the light reaching each point."""
+        s = self.settings
+        ambient = np.asarray(s.ambient, dtype=self.dtype)
+        incoming = [self.light_arriving(light, surface) for light in self.scene.lights]
+        if s.shading == "phong":
+            return shading.shade_phong(surface, incoming, ambient)
+        if s.shading == "blinn_phong":
+            return shading.shade_blinn_phong(surface, incoming, ambient)
+        return shading.shade_toon(surface, incoming, ambient, s.toon_bands)
+
+    def light_arriving(self, light, surface):
+        """``(L, radiance)`` of one light at every surface point, shadows included."""
+        s = self.settings
+        to_light, distance, radiance = light_at(light, surface.position)
+        if s.shadows == "none":
+            return to_light, radiance
+        # Only points facing the light can receive any; skip the others' shadow rays.
+        facing = (shading.dot(surface.normal, to_light) > 0) & (radiance.max(axis=1) > 0)
+        visible = np.zeros(len(to_light), dtype=self.dtype)
+        origins = surface.position[facing] + \
+            self.dtype.type(s.surface_offset) * surface.normal[facing]
+        args = (self.sdf, origins, to_light[facing], distance[facing], s.max_steps,
+                s.epsilon, s.max_distance)
+        visible[facing] = (hard_shadow(*args) if s.shadows == "hard"
+                           else soft_shadow(*args, self.dtype.type(s.penumbra_k)))
+        return to_light, radiance * visible[:, None]

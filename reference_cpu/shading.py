@@ -1,0 +1,147 @@
+"""Shading: the colour of a surface point under the lights, and the other shading modes.
+
+The lit models take the light arriving at each point (``incoming``: one ``(L, radiance)`` pair
+per light, radiance already multiplied by attenuation and shadow) and return linear RGB.
+
+Phong (source 000, after Phong 1975)::
+
+    I = ka albedo i_a + sum_m radiance_m (kd max(N.L_m, 0) albedo + ks max(R_m.V, 0)^alpha)
+
+with R_m = reflect(-L_m, N) and V the unit vector toward the eye. Blinn-Phong replaces R.V by
+N.H with H = normalize(L + V). Specular light is not tinted by the albedo (as in source 000),
+and it is zero where N.L <= 0 so that a light behind a surface cannot make a highlight on it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from marchlab.colormaps import heat
+
+
+@dataclass
+class Surface:
+    """What shading needs at N surface points (all arrays have N rows)."""
+    position: np.ndarray    # (N, 3)
+    normal: np.ndarray      # (N, 3) unit
+    view: np.ndarray        # (N, 3) unit, from the point toward the eye
+    albedo: np.ndarray      # (N, 3)
+    ka: np.ndarray          # (N,)
+    kd: np.ndarray          # (N,)
+    ks: np.ndarray          # (N,)
+    shininess: np.ndarray   # (N,)
+
+
+def dot(a, b):
+    """Row-wise dot product of (N, 3) arrays -> (N,)."""
+    return np.einsum("ij,ij->i", a, b)
+
+
+def reflect(d, n):
+    """Mirror direction of ``d`` about the normal ``n``: d - 2 (d.n) n (source 000's derivation)."""
+    return d - 2 * dot(d, n)[:, None] * n
+
+
+def diffuse(n, l):
+    """Lambert's cosine term max(N.L, 0)."""
+    return np.maximum(dot(n, l), 0)
+
+
+def specular_phong(n, l, v, shininess):
+    """max(R.V, 0)^alpha with R = reflect(-L, N); zero where the light is behind the surface."""
+    r = reflect(-l, n)
+    return np.where(dot(n, l) > 0, np.maximum(dot(r, v), 0) ** shininess, 0)
+
+
+def specular_blinn_phong(n, l, v, shininess):
+    """max(N.H, 0)^alpha with the half vector H = normalize(L + V) (Blinn 1977)."""
+    h = l + v
+    h = h / np.linalg.norm(h, axis=-1, keepdims=True)
+    return np.where(dot(n, l) > 0, np.maximum(dot(n, h), 0) ** shininess, 0)
+
+
+def shade_phong(s: Surface, incoming, ambient):
+    """The Phong model summed over the lights, plus ambient."""
+    return _lit(s, incoming, ambient, lambda x: x, specular_phong)
+
+
+def shade_blinn_phong(s: Surface, incoming, ambient):
+    """Phong with the Blinn half-vector highlight."""
+    return _lit(s, incoming, ambient, lambda x: x, specular_blinn_phong)
+
+
+def shade_toon(s: Surface, incoming, ambient, bands):
+    """Phong with the diffuse and specular terms quantised into ``bands`` levels (sources 002, 003)."""
+    return _lit(s, incoming, ambient, lambda x: toon_band(x, bands), specular_phong)
+
+
+def _lit(s, incoming, ambient, shape, specular):
+    color = s.ka[:, None] * s.albedo * ambient
+    for to_light, radiance in incoming:
+        d = shape(diffuse(s.normal, to_light))
+        sp = shape(specular(s.normal, to_light, s.view, s.shininess))
+        color = color + radiance * (s.kd[:, None] * d[:, None] * s.albedo + (s.ks * sp)[:, None])
+    return color
+
+
+def toon_band(x, bands):
+    """Quantise x in [0, 1] to ``bands`` levels 0, 1/(bands-1), ..., 1.
+
+    Each step is a narrow smoothstep (a tenth of a band wide) rather than a jump, so the
+    result is continuous: a rounding difference in x changes the colour by a rounding
+    difference, not by a whole band.
+    """
+    q = x * bands
+    level = np.floor(q)
+    step = smoothstep(0.9, 1.0, q - level)
+    return np.minimum((level + step) / (bands - 1), 1)
+
+
+def smoothstep(edge0, edge1, x):
+    """GLSL's smoothstep: 0 below edge0, 1 above edge1, 3u^2 - 2u^3 between."""
+    u = np.clip((x - edge0) / (edge1 - edge0), 0, 1)
+    return u * u * (3 - 2 * u)
+
+
+def shade_normals(normal):
+    """|N| as a colour (source 003's "colourful" shader): x red, y green, z blue."""
+    return np.abs(normal)
+
+
+def shade_depth(t, max_distance):
+    """Grey 1 - t / max_distance: white at the eye, black at max_distance (source 002's "BN")."""
+    grey = np.clip(1 - t / max_distance, 0, 1)
+    return np.repeat(grey[:, None], 3, axis=1)
+
+
+def shade_steps(steps, max_steps):
+    """The heat map of how many SDF evaluations a ray took, out of max_steps."""
+    return heat(steps / max_steps)
+
+
+def checker(p, color_a, color_b, scale):
+    """Checkerboard in the xz-plane: color_a where floor(x/s) + floor(z/s) is even."""
+    parity = (np.floor(p[:, 0] / scale) + np.floor(p[:, 2] / scale)) % 2
+    return np.where(parity[:, None] == 0, color_a, color_b)
+
+
+def apply_fog(color, t, fog_color, density):
+    """Exponential fog: mix toward the fog colour by 1 - exp(-density t) (Quilez, "Fog")."""
+    amount = 1 - np.exp(-density * t)
+    return color + (fog_color - color) * amount[:, None]
+
+
+def background(direction, bg):
+    """What a ray that hits nothing sees: a solid colour, or a sky gradient by the ray's y.
+
+    The sky blends ``bottom`` to ``top`` by a = (d.y + 1) / 2, as in "Ray Tracing in One
+    Weekend" (Shirley), so straight down is ``bottom`` and straight up is ``top``.
+    """
+    dtype = direction.dtype
+    if bg.kind == "solid":
+        return np.broadcast_to(np.asarray(bg.color, dtype=dtype), direction.shape)
+    a = (direction[:, 1:2] + 1) / 2
+    bottom, top = np.asarray(bg.bottom, dtype=dtype), np.asarray(bg.top, dtype=dtype)
+    return bottom + (top - bottom) * a
