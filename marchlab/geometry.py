@@ -5,9 +5,19 @@ from __future__ import annotations
 import numpy as np
 
 
+def dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Dot product of 3-vectors along the last axis: (..., 3) with (..., 3) or (3,) -> (...).
+
+    Written out term by term, (a.x b.x + a.y b.y) + a.z b.z, rather than with einsum, @ or
+    linalg.norm: those may sum in an order that depends on the memory layout or the batch
+    size, and a pixel's value must not depend on which other rays were traced with it.
+    """
+    return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1] + a[..., 2] * b[..., 2]
+
+
 def normalize(v: np.ndarray) -> np.ndarray:
     """Unit vectors along the last axis. v : (..., 3) ndarray."""
-    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+    return v / np.sqrt(dot(v, v))[..., None]
 
 
 def rotation_matrix(degrees) -> np.ndarray:

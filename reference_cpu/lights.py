@@ -11,6 +11,7 @@ import math
 
 import numpy as np
 
+from marchlab.geometry import dot
 from marchlab.scene import DirectionalLight, PointLight, SpotLight
 
 from .sdf import length
@@ -42,7 +43,7 @@ def light_at(light, p):
     if isinstance(light, SpotLight):
         axis = np.asarray(light.direction, dtype=np.float64)
         axis = (axis / np.linalg.norm(axis)).astype(dtype)
-        factor = factor * spot_cone(-to_light @ axis, light.inner_angle, light.outer_angle)
+        factor = factor * spot_cone(-dot(to_light, axis), light.inner_angle, light.outer_angle)
     elif not isinstance(light, PointLight):
         raise TypeError(f"unknown light type {type(light).__name__}")
     return to_light, distance, factor[:, None] * color.astype(dtype)

@@ -10,6 +10,10 @@ import math
 
 import numpy as np
 
+from marchlab.geometry import dot
+
+from .march import columns
+
 # Both methods compute n = normalize(sum_k k f(p + h k)) over a stencil of unit offsets k.
 # Central differences: +-h along each axis, so the sum is (f(p+hx) - f(p-hx), ...): 6 samples.
 # Tetrahedron: the 4 corners of a regular tetrahedron, whose sum k k^T is proportional to the
@@ -26,8 +30,9 @@ def estimate_normal(sdf, p, h, method="central"):
     Where the estimated gradient vanishes (a point equidistant from several surfaces) the
     result is the zero vector; the caller decides what that means.
     """
+    p = columns(p)
     gradient = np.zeros_like(p)
     for k in STENCILS[method].astype(p.dtype):
         gradient += sdf(p + h * k)[0][:, None] * k
-    size = np.linalg.norm(gradient, axis=-1, keepdims=True)
+    size = np.sqrt(dot(gradient, gradient))[:, None]
     return np.divide(gradient, size, out=np.zeros_like(gradient), where=size > 0)

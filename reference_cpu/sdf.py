@@ -11,10 +11,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from marchlab.geometry import dot
+
 
 def length(v: np.ndarray) -> np.ndarray:
-    """Euclidean length along the last axis. v : (..., k) -> (...)."""
-    return np.sqrt(np.einsum("...i,...i->...", v, v))
+    """Euclidean length of 3-vectors along the last axis: (N, 3) -> (N,)."""
+    return np.sqrt(dot(v, v))
 
 
 def length2(x: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -51,8 +53,8 @@ def sdf_round_box(p, half_size, radius):
 
 def sdf_plane(p, normal, offset):
     """Half-space ``normal . x <= offset`` (``normal`` (3,) need not be unit length)."""
-    n = normal / np.sqrt(np.dot(normal, normal))
-    return p @ n - offset
+    n = normal / np.sqrt(dot(normal, normal))
+    return dot(p, n) - offset
 
 
 def sdf_torus(p, major_radius, minor_radius):
@@ -73,7 +75,7 @@ def sdf_capped_cylinder(p, radius, half_height):
 def sdf_capsule(p, a, b, radius):
     """Distance to the segment a-b (closest point by clamped projection), minus the radius."""
     pa, ba = p - a, b - a
-    h = np.clip((pa @ ba) / np.dot(ba, ba), 0, 1)
+    h = np.clip(dot(pa, ba) / dot(ba, ba), 0, 1)
     return length(pa - h[:, None] * ba) - radius
 
 
@@ -150,8 +152,12 @@ def op_translate(p, offset):
 
 
 def op_rotate(p, matrix):
-    """Query point for a shape rotated by ``matrix`` R (3, 3): R^T p, written for rows as p R."""
-    return p @ matrix
+    """Query point for a shape rotated by ``matrix`` R (3, 3): R^T p for every point.
+
+    Component j of R^T p is p . (column j of R). Stacked as rows and transposed, the result
+    is stored column by column like ``p`` (see `reference_cpu.march.columns`).
+    """
+    return np.stack([dot(p, matrix[:, j]) for j in range(3)]).T
 
 
 def op_scale(p, factor):

@@ -19,6 +19,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from marchlab.colormaps import heat
+from marchlab.geometry import dot, normalize
+
 
 
 @dataclass
@@ -32,11 +34,6 @@ class Surface:
     kd: np.ndarray          # (N,)
     ks: np.ndarray          # (N,)
     shininess: np.ndarray   # (N,)
-
-
-def dot(a, b):
-    """Row-wise dot product of (N, 3) arrays -> (N,)."""
-    return np.einsum("ij,ij->i", a, b)
 
 
 def reflect(d, n):
@@ -57,8 +54,7 @@ def specular_phong(n, l, v, shininess):
 
 def specular_blinn_phong(n, l, v, shininess):
     """max(N.H, 0)^alpha with the half vector H = normalize(L + V) (Blinn 1977)."""
-    h = l + v
-    h = h / np.linalg.norm(h, axis=-1, keepdims=True)
+    h = normalize(l + v)
     return np.where(dot(n, l) > 0, np.maximum(dot(n, h), 0) ** shininess, 0)
 
 

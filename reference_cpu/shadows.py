@@ -35,28 +35,19 @@ def hard_shadow(sdf, origins, to_light, light_distance, max_steps, epsilon, max_
 def soft_shadow(sdf, origins, to_light, light_distance, max_steps, epsilon, max_distance, k):
     """Penumbra estimate in [0, 1] (Quilez, "Soft shadows in raymarched SDFs", 2010).
 
-    While marching, a ray that passes at distance h from a surface after travelling t is
-    "almost blocked" by the ratio h/t (the angle it clears the occluder by); the light
-    visible is the smallest k h / t seen, clamped to [0, 1]. A hit (h < epsilon) means 0.
-    The first sample, at t = 0, has not travelled yet and gives no ratio. It uses the same
-    stepping rules as `march`.
+    A ray that passes at distance h from a surface after travelling t clears it by an angle
+    of about h/t: the smaller that is, the more of an area light the occluder would hide. So
+    the shadow ray is an ordinary march that also keeps the smallest k h / t it sees; the
+    light visible is that value clamped to [0, 1], and 0 if the ray hits something. Larger k
+    gives harder shadows. The first sample, at t = 0, has not travelled yet and is skipped.
     """
-    dtype = origins.dtype
-    n = len(origins)
-    visible = np.ones(n, dtype=dtype)
-    limit = np.minimum(light_distance, max_distance).astype(dtype)
+    visible = np.ones(len(origins), dtype=origins.dtype)
 
-    index = np.arange(n)
-    o, d, t, lim = origins, to_light, np.zeros(n, dtype=dtype), limit
-    for step in range(max_steps):
-        h = sdf(o + t[:, None] * d)[0]
-        if step > 0:
+    def penumbra(index, t, h, step):
+        if step > 1:
             visible[index] = np.minimum(visible[index], k * h / t)
-        blocked = h < epsilon
-        visible[index[blocked]] = 0
-        t = t + np.abs(h)
-        keep = ~blocked & (t <= lim)
-        index, o, d, t, lim = index[keep], o[keep], d[keep], t[keep], lim[keep]
-        if index.size == 0:
-            break
+
+    limit = np.minimum(light_distance, max_distance)
+    _, _, blocked = march(origins, to_light, sdf, max_steps, epsilon, limit, observe=penumbra)
+    visible[blocked] = 0
     return np.clip(visible, 0, 1)
