@@ -1,8 +1,9 @@
 """Signed distance functions and the operators that combine them, over arrays of points.
 
-Every function takes points ``p : (N, 3) ndarray`` and returns distances ``(N,)`` in the dtype
-of ``p``. Primitives are centred on the origin; transforms move the query point instead of the
-shape. Formulas from Inigo Quilez, "Distance functions"
+Every function takes points ``p : (N, 3) ndarray`` and returns distances ``(N,)``. Results are
+in the dtype of ``p`` when the parameters are Python numbers or arrays of that dtype
+(`reference_cpu.scene_sdf` converts them so). Primitives are centred on the origin; transforms
+move the query point instead of the shape. Formulas from Inigo Quilez, "Distance functions"
 (https://iquilezles.org/articles/distfunctions/); the GLSL and OpenCL versions use the same
 names.
 """
