@@ -109,7 +109,7 @@ def field_types(cls) -> dict[str, Any]:
 
 
 def show(value) -> str:
-    """A value as a user would write it in a scene file."""
+    """A value as a user would write it in a scene file (strings quoted and escaped)."""
     if isinstance(value, str):
         return repr(value)
     if isinstance(value, tuple):

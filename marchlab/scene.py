@@ -19,7 +19,7 @@ from .shapes import Node, primitives
 
 @dataclass(frozen=True)
 class Camera(Record):
-    """A pinhole camera; the ray of each pixel is given in docs/scene-format.md."""
+    """A pinhole camera; the ray of each pixel is defined under "The camera" above."""
     position: Vec3 = param((0.0, 1.0, 5.0), "Eye position.")
     look_at: Vec3 = param((0.0, 0.0, 0.0), "Point the camera looks at.")
     up: Vec3 = param((0.0, 1.0, 0.0), "Approximate up direction.", nonzero)
