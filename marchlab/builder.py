@@ -6,7 +6,8 @@
     cut = box(1) - sphere(1.3)
     blob = sphere(0.6).smooth_union(sphere(0.6).at(0.8, 0, 0), k=0.3)
     scene = Scene(objects=[floor, ball, cut.rotate(0, 45, 0).at(3, 1, 0), blob],
-                  materials={"floor": Material(checker=Checker()), "red": Material(color=(1, 0, 0))})
+                  materials={"floor": Material(checker=Checker()), "red": Material(color=(1, 0, 0)),
+                             "default": Material()})
 
 Each function returns a node of `marchlab.shapes`; the node's methods ``at``, ``rotate``,
 ``scale``, ``repeat``, ``smooth_union``... and the operators ``|``, ``&``, ``-`` combine them.

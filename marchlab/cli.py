@@ -39,6 +39,21 @@ def parse_size(text: str) -> tuple[int, int]:
     return width, height
 
 
+def _attach_dashed_values(argv: list[str]) -> list[str]:
+    """Write ``--size -5x5`` as ``--size=-5x5``.
+
+    argparse takes a value starting with "-" for an option, and would answer "expected one
+    argument" instead of saying what is wrong with the size.
+    """
+    out = []
+    for arg in map(str, argv):
+        if out and out[-1] == "--size" and arg.startswith("-"):
+            out[-1] = f"--size={arg}"
+        else:
+            out.append(arg)
+    return out
+
+
 def build_parser() -> Parser:
     parser = Parser(prog="marchlab", description="Sphere-tracing teaching toolkit.")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
@@ -67,7 +82,7 @@ def build_parser() -> Parser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    args = build_parser().parse_args(_attach_dashed_values(sys.argv[1:] if argv is None else argv))
     try:
         return args.func(args) or 0
     except MarchlabError as err:

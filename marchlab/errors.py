@@ -6,6 +6,9 @@ A `SceneError` knows *where* the problem is: the file, and the field path inside
 
 from __future__ import annotations
 
+import json
+import re
+
 
 class MarchlabError(Exception):
     """An error caused by the user's input (not a bug): shown as one line, no traceback."""
@@ -42,12 +45,20 @@ class SceneError(MarchlabError):
         return ": ".join(parts + [self.problem])
 
 
+_BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
+
+
 def format_path(path) -> str:
-    """``("objects", 2, "radius")`` -> ``"objects[2].radius"``."""
+    """``("objects", 2, "radius")`` -> ``"objects[2].radius"``.
+
+    A key that TOML would have to quote is quoted and escaped (``materials."two\\nlines"``),
+    so the path, and the one-line message holding it, stays on one line.
+    """
     text = ""
     for part in path:
         if isinstance(part, int):
             text += f"[{part}]"
         else:
-            text += f".{part}" if text else str(part)
+            key = part if _BARE_KEY.fullmatch(part) else json.dumps(part)
+            text += f".{key}" if text else key
     return text
