@@ -69,7 +69,7 @@ def load_scene(name_or_path: str | os.PathLike, overrides: list[str] = ()) -> Sc
     ``--set render.max_steps=64``.
     """
     path = scene_path(name_or_path)
-    source = str(name_or_path) if path.suffix == "" else str(path)
+    source = str(name_or_path)          # as the user wrote it: a bundled name or a path
     try:
         with open(path, "rb") as fh:
             data = tomllib.load(fh)
@@ -180,52 +180,49 @@ def _expand_shorthand(node: Node, table: dict, path: tuple) -> Node:
 
 # --- Overrides (--set) -------------------------------------------------------------------------
 
-_STEP = re.compile(r"(\.?)([A-Za-z_][A-Za-z0-9_-]*)|\[(\d+)\]")
+_PATH = re.compile(r"[A-Za-z_][\w-]*(?:\.[A-Za-z_][\w-]*|\[\d+\])*")
+_STEP = re.compile(r"[A-Za-z_][\w-]*|\[(\d+)\]")
+
+
+def parse_field_path(text: str) -> tuple:
+    """``"objects[2].radius"`` -> ``("objects", 2, "radius")``, or None if it is not a path."""
+    if not _PATH.fullmatch(text):
+        return None
+    return tuple(int(m.group(1)) if m.group(1) else m.group(0) for m in _STEP.finditer(text))
 
 
 def apply_override(data: dict, assignment: str) -> None:
     """Apply ``"render.max_steps=64"`` or ``"objects[2].radius=0.5"`` to a parsed scene file.
 
     The value is read as TOML (``[1, 2, 3]``, ``true``, ``"text"``); a bare word that is not
-    TOML is taken as a string, so ``render.shading=toon`` works.
+    TOML is taken as a string, so ``render.shading=toon`` works. Missing tables on the way are
+    created (``render.fog.density=0.1``); the scene's own checks then judge the result.
     """
     key, sep, text = assignment.partition("=")
-    key = key.strip()
-    steps, pos = [], 0
-    while pos < len(key):
-        match = _STEP.match(key, pos)
-        if not match or (match.group(1) == "") != (pos == 0) and match.group(2):
-            raise SceneError(f"--set {assignment!r}: cannot read the field path {key!r}")
-        steps.append(match.group(2) if match.group(2) else int(match.group(3)))
-        pos = match.end()
-    if not sep or not steps or isinstance(steps[0], int):
+    path = parse_field_path(key.strip())
+    if not sep or path is None:
         raise SceneError(f"--set {assignment!r}: expected FIELD.PATH=VALUE, "
-                         "e.g. render.max_steps=64")
+                         "e.g. render.max_steps=64 or objects[0].radius=0.5")
     try:
         value = tomllib.loads(f"v = {text.strip()}")["v"]
     except tomllib.TOMLDecodeError:
         value = text.strip()
     target = data
-    for i, step in enumerate(steps[:-1]):
-        here = tuple(steps[:i + 1])
+    for depth, step in enumerate(path):
+        here = path[:depth + 1]
         if isinstance(step, int):
-            if not isinstance(target, list) or step >= len(target):
-                size = len(target) if isinstance(target, list) else 0
-                raise SceneError(f"no such entry (there are {size})", here)
-            target = target[step]
-        else:
-            if not isinstance(target, dict):
-                raise SceneError("is not a table", here[:-1])
+            if not isinstance(target, list):
+                raise SceneError("is not an array", path[:depth])
+            if step >= len(target):
+                raise SceneError(f"no such entry (there are {len(target)})", here)
+        elif not isinstance(target, dict):
+            raise SceneError("is not a table", path[:depth])
+        if here == path:
+            target[step] = value
+        elif isinstance(step, str):
             target = target.setdefault(step, {})
-    last = steps[-1]
-    if isinstance(last, int):
-        if not isinstance(target, list) or last >= len(target):
-            raise SceneError("no such entry", tuple(steps))
-        target[last] = value
-    elif isinstance(target, dict):
-        target[last] = value
-    else:
-        raise SceneError("is not a table", tuple(steps[:-1]))
+        else:
+            target = target[step]
 
 
 # --- Writing ---------------------------------------------------------------------------------
