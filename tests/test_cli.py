@@ -427,3 +427,19 @@ def test_write_atomically_renames_a_complete_temp_file_over_the_target(tmp_path,
     assert seen["target_then"] == b"old" and seen["temp_then"] == payload
     assert target.read_bytes() == payload
     assert sorted(p.name for p in tmp_path.iterdir()) == ["image.png"]
+
+
+def test_written_files_get_ordinary_permissions_or_keep_the_old_ones(tmp_path):
+    """A new file gets 0666 less the umask like open(); a replaced file keeps its mode."""
+    umask = os.umask(0o022)
+    try:
+        fresh = tmp_path / "fresh.png"
+        write_atomically(fresh, b"new")
+        assert fresh.stat().st_mode & 0o777 == 0o644
+        kept = tmp_path / "kept.png"
+        kept.write_bytes(b"old")
+        kept.chmod(0o640)
+        write_atomically(kept, b"new")
+        assert kept.stat().st_mode & 0o777 == 0o640 and kept.read_bytes() == b"new"
+    finally:
+        os.umask(umask)
