@@ -14,7 +14,7 @@ from pathlib import Path
 
 from .errors import MarchlabError
 from .frame import AOVS
-from .render import BACKENDS, PRECISIONS, render
+from .render import BACKENDS, MAX_SIDE, PRECISIONS, render
 from .scenefile import bundled_scene_names, load_scene, scene_to_toml
 
 OUTPUT_SUFFIXES = (".png", ".npz")
@@ -33,9 +33,10 @@ def parse_size(text: str) -> tuple[int, int]:
         width, height = (int(part) for part in text.lower().split("x"))
     except ValueError:
         width = height = 0
-    if width < 1 or height < 1:
+    if not (1 <= width <= MAX_SIDE and 1 <= height <= MAX_SIDE):
         raise argparse.ArgumentTypeError(
-            f"expected WIDTHxHEIGHT with positive integers, e.g. 640x480 (got {text!r})")
+            f"expected WIDTHxHEIGHT with positive integers up to {MAX_SIDE}, e.g. 640x480 "
+            f"(got {text!r})")
     return width, height
 
 

@@ -19,6 +19,7 @@ BACKENDS = {
 }
 
 PRECISIONS = ("float32", "float64")
+MAX_SIDE = 16384      # the usual largest GPU texture; far beyond what a lesson needs
 
 
 def render(scene: Scene, width: int, height: int, backend: str = "numpy",
@@ -43,8 +44,8 @@ def render(scene: Scene, width: int, height: int, backend: str = "numpy",
     if precision not in PRECISIONS:
         raise MarchlabError(f"unknown precision {precision!r} (one of: {', '.join(PRECISIONS)})")
     for name, value in (("width", width), ("height", height)):
-        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-            raise MarchlabError(f"{name} must be a positive integer (got {value!r})")
+        if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= MAX_SIDE:
+            raise MarchlabError(f"{name} must be an integer from 1 to {MAX_SIDE} (got {value!r})")
     if not isinstance(scene, Scene):
         raise MarchlabError(f"scene must be a marchlab.Scene (got {type(scene).__name__}); "
                             "use marchlab.load_scene(name_or_path)")

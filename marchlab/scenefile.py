@@ -26,7 +26,7 @@ import tomlkit
 from .errors import SceneError
 from .fields import field_types
 from .files import write_atomically
-from .scene import Background, Light, Material, Scene
+from .scene import Background, Light, Scene
 from .shapes import Node, Primitive, Rotate, Scale, Translate, node_kinds
 
 # Shorthand keys on an object table, outermost first, and the transform each one stands for.
@@ -54,6 +54,8 @@ def scene_path(name_or_path: str | os.PathLike) -> Path:
     path = Path(name_or_path)
     if path.is_file():
         return path
+    if path.is_dir():
+        raise SceneError("is a folder, not a scene file", (), str(name_or_path))
     bundled = resources.files("marchlab") / "scenes" / f"{name_or_path}.toml"
     if path.suffix == "" and bundled.is_file():
         return Path(str(bundled))
@@ -75,6 +77,9 @@ def load_scene(name_or_path: str | os.PathLike, overrides: list[str] = ()) -> Sc
             data = tomllib.load(fh)
     except tomllib.TOMLDecodeError as err:
         raise SceneError(f"TOML syntax error: {err}", (), source) from None
+    except UnicodeDecodeError as err:
+        raise SceneError(f"not UTF-8 text, as TOML requires (byte {err.object[err.start]:#04x} "
+                         f"at offset {err.start})", (), source) from None
     except OSError as err:
         raise SceneError(f"cannot read: {err.strerror}", (), source) from None
     try:
@@ -159,6 +164,8 @@ def _pick(base, table, path) -> type:
     if "type" not in table:
         raise SceneError(f"missing key 'type' (one of: {', '.join(sorted(kinds))})", path)
     kind = table["type"]
+    if not isinstance(kind, str):
+        raise SceneError(f"must be a string (got {type(kind).__name__})", path + ("type",))
     if kind not in kinds:
         close = difflib.get_close_matches(str(kind), sorted(kinds), n=1)
         hint = f"did you mean {close[0]!r}?" if close else f"one of: {', '.join(sorted(kinds))}"
@@ -170,7 +177,7 @@ def _expand_shorthand(node: Node, table: dict, path: tuple) -> Node:
     """Wrap ``node`` in the transforms its shorthand keys ask for (innermost: scale)."""
     for key in reversed(SHORTHAND):
         if key in table:
-            cls, field = SHORTHAND[key]
+            cls, _ = SHORTHAND[key]
             try:
                 node = cls(node, table[key])
             except SceneError as err:

@@ -271,9 +271,10 @@ def test_toml_syntax_error_exits_2_naming_file_and_line(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("size_args", [["--size", "640by480"], ["--size", "0x10"],
-                                       ["--size=-5x5"], ["--size", "10x0"], ["--size", "3x4x5"]],
+                                       ["--size=-5x5"], ["--size", "10x0"], ["--size", "3x4x5"],
+                                       ["--size", "100000x10"]],
                          ids=["word_separator", "zero_width", "negative_width", "zero_height",
-                              "three_numbers"])
+                              "three_numbers", "beyond_16384"])
 def test_bad_size_exits_2_with_one_line_quoting_it(size_args, tmp_path, capsys):
     out = tmp_path / "out.png"
     code, _, err = run_cli(capsys, "render", "classroom", "-o", out, *size_args)

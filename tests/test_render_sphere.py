@@ -198,3 +198,9 @@ def test_rendered_frame_colour_is_float32_in_the_unit_interval(frame):
     np.testing.assert_array_equal(frame.color[~frame.hit],
                                   np.broadcast_to(np.float32([0.1, 0.2, 0.3]),
                                                   frame.color[~frame.hit].shape))
+
+
+@pytest.mark.parametrize("width, height", [(0, 10), (10, 16385), (2.5, 10), (True, 10)])
+def test_render_refuses_sizes_outside_1_to_16384_in_one_line(width, height):
+    with pytest.raises(marchlab.MarchlabError, match="must be an integer from 1 to 16384"):
+        marchlab.render(SCENE, width, height)

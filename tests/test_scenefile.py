@@ -580,3 +580,17 @@ def test_malformed_override_raises_scene_error_quoting_it(assignment):
         load_scene("classroom", [assignment])
     assert names_classroom(caught.value)
     assert repr(assignment) in str(caught.value)
+
+
+def test_a_file_that_is_not_utf8_is_refused_in_one_line(tmp_path):
+    path = tmp_path / "latin1.toml"
+    path.write_bytes(b'description = "caf\xe9"\n')
+    with pytest.raises(SceneError) as caught:
+        load_scene(path)
+    assert str(caught.value) == f"{path}: not UTF-8 text, as TOML requires (byte 0xe9 at offset 18)"
+
+
+def test_a_folder_is_not_taken_for_a_scene(tmp_path):
+    with pytest.raises(SceneError) as caught:
+        load_scene(tmp_path)
+    assert str(caught.value) == f"{tmp_path}: is a folder, not a scene file"
