@@ -1,0 +1,58 @@
+"""marchlab loads a backend only when it is used; the CLI shows progress only on a terminal."""
+
+import io
+import subprocess
+import sys
+import time
+
+from marchlab import cli
+
+BACKEND_MODULES = ("reference_cpu", "gpu_shader", "moderngl", "pyopencl", "embreex")
+
+
+def loaded_after(code: str) -> list[str]:
+    """Which backend modules are imported after running ``code`` in a fresh interpreter."""
+    probe = f"{code}\nimport sys\nprint([m for m in {BACKEND_MODULES!r} if m in sys.modules])"
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                         check=True)
+    return eval(out.stdout.strip().splitlines()[-1])
+
+
+def test_importing_marchlab_and_its_cli_loads_no_backend():
+    assert loaded_after("import marchlab, marchlab.cli, marchlab.builder, marchlab.compare") == []
+
+
+def test_rendering_with_numpy_loads_only_the_numpy_backend():
+    code = "import marchlab\nmarchlab.render(marchlab.load_scene('classroom'), 4, 3)"
+    assert loaded_after(code) == ["reference_cpu"]
+
+
+class FakeTerminal(io.StringIO):
+    def __init__(self, tty: bool):
+        super().__init__()
+        self.tty = tty
+
+    def isatty(self):
+        return self.tty
+
+
+def run_progress(monkeypatch, tty: bool, seconds: float) -> str:
+    """Drive cli.progress_bar like a render of 4 blocks lasting ``seconds``; return stderr."""
+    stderr = FakeTerminal(tty)
+    monkeypatch.setattr(sys, "stderr", stderr)
+    with cli.progress_bar(4000) as progress:
+        for done in (1000, 2000, 3000, 4000):
+            time.sleep(seconds / 4)
+            if progress is not None:
+                progress(done, 4000)
+    return stderr.getvalue()
+
+
+def test_progress_bar_is_drawn_on_a_terminal_once_a_render_takes_over_a_second(monkeypatch):
+    shown = run_progress(monkeypatch, tty=True, seconds=1.3)
+    assert "px" in shown and "%" in shown
+
+
+def test_no_progress_bar_for_a_quick_render_or_when_stderr_is_not_a_terminal(monkeypatch):
+    assert run_progress(monkeypatch, tty=True, seconds=0.2) == ""
+    assert run_progress(monkeypatch, tty=False, seconds=1.3) == ""
