@@ -87,12 +87,9 @@ class Tracer:
         s = self.settings
         t, steps, hit = march(origin, directions, self.sdf, s.max_steps, s.epsilon,
                               s.max_distance)
-        p = origin + t[hit, None] * directions[hit]
         normal = np.zeros_like(directions)
-        normal[hit] = estimate_normal(self.sdf, p, self.dtype.type(s.normal_step),
-                                      s.normal_method)
         object_id = np.full(len(directions), -1, np.int32)
-        object_id[hit] = self.sdf_ids(p)[1]
+        normal[hit], object_id[hit] = self.hit_info(origin + t[hit, None] * directions[hit])
 
         if s.shading == "steps":
             color = shading.shade_steps(steps, s.max_steps)
@@ -114,15 +111,12 @@ class Tracer:
         o = np.broadcast_to(origin, directions.shape)
         d = directions
         for bounce in range(s.reflection_depth + 1):
-            if bounce > 0:
-                t, _, hit = march(o, d, self.sdf, s.max_steps, s.epsilon, s.max_distance)
-                p = o[hit] + t[hit, None] * d[hit]
-                normal = estimate_normal(self.sdf, p, self.dtype.type(s.normal_step),
-                                         s.normal_method)
-                ids = self.sdf_ids(p)[1]
-            else:
-                p = o[hit] + t[hit, None] * d[hit]
+            if bounce == 0:                                   # the primary ray, traced
                 normal, ids = normal[hit], object_id[hit]
+            else:
+                t, _, hit = march(o, d, self.sdf, s.max_steps, s.epsilon, s.max_distance)
+                normal, ids = self.hit_info(o[hit] + t[hit, None] * d[hit])
+            p = o[hit] + t[hit, None] * d[hit]
             miss = ~hit
             color[ray[miss]] += weight[miss, None] * shading.background(d[miss], s.background)
 
@@ -142,6 +136,12 @@ class Tracer:
             o = p[go] + self.dtype.type(s.surface_offset) * normal[go]
             d = shading.reflect(d[hit][go], normal[go])
         return color
+
+    def hit_info(self, p):
+        """The normal (N, 3) and object id (N,) at hit points ``p`` (N, 3)."""
+        s = self.settings
+        normal = estimate_normal(self.sdf, p, self.dtype.type(s.normal_step), s.normal_method)
+        return normal, self.sdf_ids(p)[1]
 
     def surface(self, p, normal, view, ids) -> shading.Surface:
         """Gather the material of each hit point by its object id."""
