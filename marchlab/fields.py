@@ -59,6 +59,10 @@ def nonzero(v) -> str | None:
     return None if any(c != 0.0 for c in v) else "must not be the zero vector"
 
 
+def all_positive(v) -> str | None:
+    return None if all(c > 0 for c in v) else "components must be positive"
+
+
 def nonnegative_vector(v) -> str | None:
     return None if all(c >= 0 for c in v) else "components must be >= 0"
 

@@ -12,11 +12,8 @@ from dataclasses import dataclass
 from typing import ClassVar, Iterator
 
 from .errors import SceneError
-from .fields import Int3, Record, Vec3, nonnegative_vector, nonzero, param, positive, show
-
-
-def all_positive(v) -> str | None:
-    return None if all(c > 0 for c in v) else "components must be positive"
+from .fields import (Int3, Record, Vec3, all_positive, nonnegative_vector, nonzero, param,
+                     positive, show)
 
 
 class Node(Record):
