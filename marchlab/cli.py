@@ -68,8 +68,8 @@ def build_parser() -> Parser:
     p.add_argument("--precision", choices=PRECISIONS, default="float64")
     p.add_argument("--aov", choices=AOVS, default="color",
                    help="buffer written to a PNG (an .npz holds them all)")
-    p.add_argument("--set", action="append", default=[], metavar="FIELD=VALUE",
-                   help="override a scene field, e.g. render.max_steps=64 (repeatable)")
+    p.add_argument("--set", action="extend", nargs="+", default=[], metavar="FIELD=VALUE",
+                   help="override scene fields, e.g. --set render.max_steps=64 camera.fov=40")
     p.set_defaults(func=cmd_render)
 
     p = sub.add_parser("scenes", help="list the bundled scenes")
@@ -77,7 +77,7 @@ def build_parser() -> Parser:
 
     p = sub.add_parser("show", help="print a scene as TOML (a start for your own)")
     p.add_argument("scene", help="bundled scene name or a .toml path")
-    p.add_argument("--set", action="append", default=[], metavar="FIELD=VALUE")
+    p.add_argument("--set", action="extend", nargs="+", default=[], metavar="FIELD=VALUE")
     p.set_defaults(func=cmd_show)
     return parser
 

@@ -444,3 +444,16 @@ def test_written_files_get_ordinary_permissions_or_keep_the_old_ones(tmp_path):
         assert kept.stat().st_mode & 0o777 == 0o640 and kept.read_bytes() == b"new"
     finally:
         os.umask(umask)
+
+
+def test_several_assignments_may_follow_one_set_or_each_its_own(tmp_path, capsys):
+    one = tmp_path / "one.npz"
+    two = tmp_path / "two.npz"
+    assert run_cli(capsys, "render", "classroom", "-o", one, "--size", "8x6", "--set",
+                   "render.shading=normals", "camera.fov=30")[0] == 0
+    assert run_cli(capsys, "render", "classroom", "-o", two, "--size", "8x6",
+                   "--set", "render.shading=normals", "--set", "camera.fov=30")[0] == 0
+    expected = marchlab.render(load_scene("classroom", ["render.shading=normals", "camera.fov=30"]),
+                               8, 6)
+    for path in (one, two):
+        np.testing.assert_array_equal(Frame.load(path).color, expected.color)
