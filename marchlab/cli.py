@@ -64,8 +64,10 @@ def build_parser() -> Parser:
     p.add_argument("-o", "--output", help="output file, .png or .npz (default: SCENE.png)")
     p.add_argument("--size", type=parse_size, default=(640, 480), metavar="WxH",
                    help="image size in pixels (default: 640x480)")
-    p.add_argument("--backend", choices=list(BACKENDS), default="numpy")
-    p.add_argument("--precision", choices=PRECISIONS, default="float64")
+    p.add_argument("--backend", choices=list(BACKENDS), default="numpy",
+                   help="renderer (default: numpy, the reference)")
+    p.add_argument("--precision", choices=PRECISIONS, default="float64",
+                   help="floating-point precision of the arithmetic (default: float64)")
     p.add_argument("--aov", choices=AOVS, default="color",
                    help="buffer written to a PNG (an .npz holds them all)")
     p.add_argument("--set", action="extend", nargs="+", default=[], metavar="FIELD=VALUE",
