@@ -120,8 +120,9 @@ def _record(cls, table: Any, path: tuple, materials) -> Any:
         name = kwargs.get("material", "default")
         if isinstance(name, str) and name not in materials:
             known = ", ".join(sorted(materials)) or "none"
-            raise SceneError(f"unknown material {name!r} (defined: {known})",
-                             path + ("material",))
+            problem = (f"unknown material {name!r}" if "material" in table else
+                       "no material given, and no material named 'default' is defined")
+            raise SceneError(f"{problem} (defined: {known})", path + ("material",))
     try:
         record = cls(**kwargs)
     except SceneError as err:

@@ -594,3 +594,12 @@ def test_a_folder_is_not_taken_for_a_scene(tmp_path):
     with pytest.raises(SceneError) as caught:
         load_scene(tmp_path)
     assert str(caught.value) == f"{tmp_path}: is a folder, not a scene file"
+
+
+def test_a_primitive_without_material_needs_a_default_material(tmp_path):
+    path = tmp_path / "nodefault.toml"
+    path.write_text('[materials.red]\n\n[[objects]]\ntype = "sphere"\n')
+    with pytest.raises(SceneError) as caught:
+        load_scene(path)
+    assert str(caught.value) == (f"{path}: objects[0].material: no material given, and no "
+                                 "material named 'default' is defined (defined: red)")
