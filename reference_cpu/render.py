@@ -22,7 +22,7 @@ from marchlab.shapes import primitives
 
 from . import shading
 from .lights import light_at
-from .march import columns, march
+from .march import march
 from .normals import estimate_normal
 from .scene_sdf import build_scene_sdf
 from .shadows import hard_shadow, soft_shadow
@@ -41,7 +41,7 @@ def render(scene: Scene, width: int, height: int, precision: str = "float64",
     dtype = np.dtype(precision)
     tracer = Tracer(scene, dtype)
     origin, directions = camera_rays(scene.camera, width, height, dtype)
-    directions = columns(directions.reshape(-1, 3))
+    directions = directions.reshape(-1, 3)
     n = len(directions)
     out = {
         "color": np.zeros((n, 3), np.float32), "depth": np.full(n, np.inf, dtype),
