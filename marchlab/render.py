@@ -7,15 +7,32 @@ a backend's dependencies are loaded the first time that backend is used.
 from __future__ import annotations
 
 import importlib
+from dataclasses import dataclass
 from typing import Callable
 
 from .errors import MarchlabError
 from .frame import Frame
 from .scene import Scene
 
-# backend name -> module with render(scene, width, height, precision, progress) -> Frame
+
+
+@dataclass(frozen=True)
+class Backend:
+    """Where a backend lives and which precisions it computes in (the first is its default).
+
+    The module has ``render(scene, width, height, precision, progress) -> Frame`` and
+    ``check()``, which raises `MarchlabError` saying what is missing if it cannot run here.
+    """
+    module: str
+    precisions: tuple[str, ...]
+    description: str
+
+
 BACKENDS = {
-    "numpy": "reference_cpu.render",
+    "numpy": Backend("reference_cpu.render", ("float64", "float32"),
+                     "the NumPy reference sphere tracer (CPU)"),
+    "gpu": Backend("gpu_shader.render", ("float32",),
+                   "the generated fragment shader, through moderngl and EGL"),
 }
 
 PRECISIONS = ("float32", "float64")
@@ -23,7 +40,7 @@ MAX_SIDE = 16384      # the usual largest GPU texture; far beyond what a lesson 
 
 
 def render(scene: Scene, width: int, height: int, backend: str = "numpy",
-           precision: str = "float64",
+           precision: str | None = None,
            progress: Callable[[int, int], None] | None = None) -> Frame:
     """Render ``scene`` to a `Frame` of ``width`` x ``height`` pixels.
 
@@ -34,20 +51,35 @@ def render(scene: Scene, width: int, height: int, backend: str = "numpy",
     width, height : int
         Image size in pixels.
     backend : str
-        One of `BACKENDS` (``"numpy"``: the reference).
-    precision : {"float32", "float64"}
+        One of `BACKENDS`: ``"numpy"`` (the reference) or ``"gpu"``.
+    precision : {"float32", "float64"}, optional
+        Default: the backend's own (float64 for numpy, float32 for gpu).
     progress : callable, optional
         Called as ``progress(done, total)`` while rendering.
     """
     if backend not in BACKENDS:
         raise MarchlabError(f"unknown backend {backend!r} (available: {', '.join(BACKENDS)})")
+    precision = precision or BACKENDS[backend].precisions[0]
     if precision not in PRECISIONS:
         raise MarchlabError(f"unknown precision {precision!r} (one of: {', '.join(PRECISIONS)})")
+    if precision not in BACKENDS[backend].precisions:
+        raise MarchlabError(f"the {backend} backend renders in "
+                            f"{' or '.join(BACKENDS[backend].precisions)} only "
+                            f"(asked for {precision})")
     for name, value in (("width", width), ("height", height)):
         if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= MAX_SIDE:
             raise MarchlabError(f"{name} must be an integer from 1 to {MAX_SIDE} (got {value!r})")
     if not isinstance(scene, Scene):
         raise MarchlabError(f"scene must be a marchlab.Scene (got {type(scene).__name__}); "
                             "use marchlab.load_scene(name_or_path)")
-    module = importlib.import_module(BACKENDS[backend])
+    module = importlib.import_module(BACKENDS[backend].module)
     return module.render(scene, width, height, precision=precision, progress=progress)
+
+
+def backend_problem(backend: str) -> str | None:
+    """None if ``backend`` can render on this machine, else one line saying why not."""
+    try:
+        importlib.import_module(BACKENDS[backend].module).check()
+    except MarchlabError as err:
+        return str(err)
+    return None

@@ -1,0 +1,68 @@
+"""The small table of what differs between the C-like shading languages marchlab generates.
+
+The building blocks (``glsl/*.glsl``) and the generated code are written in a common subset:
+types ``real`` and ``vec3``, constructors ``vec3(...)``, no ``out`` parameters, structs only
+declared here. A dialect says how to spell the few things that differ: the prelude that gives
+``real`` and ``vec3`` their meaning, struct declarations, number literals, conversions and the
+parameter array. GLSL is the only dialect so far; OpenCL C is meant to be one more entry.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+# Structs shared by every dialect: name -> ((type, field), ...).
+STRUCTS = {
+    "Hit": (("real", "t"), ("int", "steps"), ("int", "hit")),
+    "LightSample": (("vec3", "to_light"), ("real", "distance"), ("vec3", "radiance")),
+}
+
+
+@dataclass(frozen=True)
+class Dialect:
+    """How one language spells the parts that differ."""
+    name: str
+    prelude: str                                  # first lines of every program
+    struct: Callable[[str, tuple], str]           # a struct declaration
+    to_real: Callable[[str], str]                 # int expression -> real
+    to_int: Callable[[str], str]                  # real expression -> int
+    declare_parameters: Callable[[int], str]      # how the program receives P[rows]
+    real_dtype: np.dtype                          # precision of `real`
+
+    def literal(self, value: float) -> str:
+        """A number literal that reads back as exactly ``value`` rounded to `real`."""
+        return np.format_float_positional(self.real_dtype.type(value), unique=True, trim="0")
+
+    def structs(self) -> str:
+        return "\n".join(self.struct(name, fields) for name, fields in STRUCTS.items())
+
+
+def _glsl_struct(name: str, fields) -> str:
+    body = "".join(f"    {type_} {field};\n" for type_, field in fields)
+    return f"struct {name}\n{{\n{body}}};\n"
+
+
+GLSL = Dialect(
+    name="glsl",
+    prelude="""\
+#version 330 core
+// `precise` (GLSL 4.00, or ARB_gpu_shader5 on 3.3) forbids fusing a * b + c into one FMA
+// rounding where the reference rounds twice.
+#extension GL_ARB_gpu_shader5 : enable
+#ifndef GL_ARB_gpu_shader5
+#define precise
+#endif
+#define real float
+""",
+    struct=_glsl_struct,
+    to_real=lambda expr: f"float({expr})",
+    to_int=lambda expr: f"int({expr})",
+    declare_parameters=lambda rows: (
+        f"layout(std140) uniform Parameters\n{{\n    vec4 P[{rows}];\n}};\n"),
+    real_dtype=np.dtype(np.float32),
+)
+
+DIALECTS = {"glsl": GLSL}

@@ -1,0 +1,362 @@
+"""The shader generator: one scene in, one readable program out, holding only what it uses.
+
+The program is assembled in the order a reader meets it:
+
+1. the dialect's prelude, the parameter names (``#define EPSILON P[4].x``) and the structs;
+2. the SDF library functions the tree uses, then ``scene_sdf`` / ``scene_object_id``
+   written from the tree (`gpu_shader.sdf_code`);
+3. the march and the shadow function the settings ask for, ``estimate_normal`` for the
+   chosen stencil;
+4. lights of the kinds present, the shading model, checker, fog and background only if used;
+5. ``pixel_color``, the per-pixel pipeline of `reference_cpu.render`, then the entry point.
+
+Every number that a frame may change is in the parameter block (`gpu_shader.parameters`), so
+the text depends only on the scene's structure, and a program cache keyed by the text never
+compiles the same structure twice.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from marchlab.camera import camera_basis
+from marchlab.colormaps import HEAT_COLORS, HEAT_STOPS
+from marchlab.errors import MarchlabError
+from marchlab.scene import DirectionalLight, PointLight, Scene, SpotLight
+from marchlab.shapes import primitives
+from reference_cpu.normals import STENCILS
+
+from .dialects import DIALECTS, Dialect
+from .library import GLSL_DIR, load_library
+from .parameters import ParameterBlock
+from .sdf_code import scene_sdf_code
+
+LIT_MODES = ("phong", "blinn_phong", "toon")
+SPECULAR = {"phong": "specular_phong", "blinn_phong": "specular_blinn_phong",
+            "toon": "specular_phong"}
+LIGHT_KINDS = {DirectionalLight: "directional", PointLight: "point", SpotLight: "spot"}
+
+
+@dataclass(frozen=True)
+class Program:
+    """A generated program and the values of its parameter block.
+
+    Attributes
+    ----------
+    source : str
+        The complete program text (for GLSL, the fragment shader).
+    parameters : (N, 4) float64 ndarray
+        What the program's ``P`` must hold for this scene and image size.
+    features : tuple of str
+        What was emitted ("sdf_sphere", "shadows:hard", "fog", ...), sorted.
+    """
+    source: str
+    parameters: np.ndarray
+    features: tuple[str, ...]
+
+
+def generate(scene: Scene, width: int, height: int, dialect: str = "glsl") -> Program:
+    """Generate the program that renders ``scene`` at ``width`` x ``height``."""
+    if dialect not in DIALECTS:
+        raise MarchlabError(f"unknown shader dialect {dialect!r} (one of: {', '.join(DIALECTS)})")
+    return _Generator(scene, DIALECTS[dialect]).program(width, height)
+
+
+class _Generator:
+    def __init__(self, scene: Scene, dialect: Dialect):
+        self.scene, self.s, self.d = scene, scene.render, dialect
+        self.block = ParameterBlock()
+        self.features: set[str] = set()
+        self.primitives = list(primitives(scene.objects))
+        self.materials = [scene.materials[p.material] for p in self.primitives]
+        self.checker = any(m.checker is not None for m in self.materials)
+        self.reflections = (self.s.reflection_depth > 0 and self.s.shading in LIT_MODES
+                            and any(m.kr > 0 for m in self.materials))
+        self.fog = self.s.fog.density > 0 and self.s.shading in LIT_MODES
+
+    def program(self, width: int, height: int) -> Program:
+        self.settings_rows(width, height)
+        sdf_source, sdf_used = scene_sdf_code(self.scene.objects, self.block)
+        self.features |= sdf_used
+        parts = [
+            ("the SDF building blocks used by this scene (glsl/sdf.glsl)",
+             load_library("sdf").select(sdf_used)),
+            ("the scene's SDF tree", sdf_source),
+            ("the camera (glsl/camera.glsl)", load_library("camera").select(["camera_ray"])),
+            ("sphere tracing (glsl/march.glsl)", load_library("march").select(self.march_needs())),
+            ("surface normals", self.normal_code()),
+        ]
+        parts += self.shading_parts()
+        parts.append(("the per-pixel pipeline (reference_cpu/render.py)", self.pixel_code()))
+        parts.append(("the entry point (glsl/main.frag)", (GLSL_DIR / "main.frag").read_text()))
+        rows = max(1, len(self.block.rows))
+        head = [self.d.prelude, _banner("parameters: one vec4 row each, set per frame")
+                + self.d.declare_parameters(rows)]
+        head.append(self.block.defines())
+        head.append(self.d.structs())
+        body = [_banner(title) + text for title, text in parts if text]
+        source = "\n".join(head + body)
+        return Program(source, self.block.values(np.float64), tuple(sorted(self.features)))
+
+    # --- parameters that every program has --------------------------------------------------
+
+    def settings_rows(self, width: int, height: int):
+        s, camera, b = self.s, self.scene.camera, self.block
+        forward, right, up = camera_basis(camera)
+        half_height = math.tan(math.radians(camera.fov) / 2)
+        b.named({"CAMERA_POSITION": ("xyz", camera.position)})
+        b.named({"CAMERA_FORWARD": ("xyz", forward)})
+        b.named({"CAMERA_RIGHT": ("xyz", right)})
+        b.named({"CAMERA_UP": ("xyz", up)})
+        b.named({"HALF_WIDTH": ("x", half_height * width / height), "HALF_HEIGHT": ("y", half_height),
+                 "IMAGE_WIDTH": ("z", width), "IMAGE_HEIGHT": ("w", height)})
+        b.named({"EPSILON": ("x", s.epsilon), "MAX_DISTANCE": ("y", s.max_distance),
+                 "NORMAL_STEP": ("z", s.normal_step), "SURFACE_OFFSET": ("w", s.surface_offset)})
+        b.named({"MAX_STEPS": ("x", s.max_steps), "REFLECTION_DEPTH": ("y", s.reflection_depth),
+                 "PENUMBRA_K": ("z", s.penumbra_k), "TOON_BANDS": ("w", s.toon_bands)})
+        # Loop bounds are integers; the block holds floats, exact for any sensible count.
+        b.names = [(n, self.d.to_int(e) if n in ("MAX_STEPS", "REFLECTION_DEPTH") else e)
+                   for n, e in b.names]
+        b.named({"AMBIENT": ("xyz", s.ambient)})
+        if self.fog:
+            self.features.add("fog")
+            b.named({"FOG_COLOR": ("xyz", s.fog.color), "FOG_DENSITY": ("w", s.fog.density)})
+
+    # --- marching and normals -----------------------------------------------------------------
+
+    def march_needs(self) -> list[str]:
+        needs = ["march"]
+        if self.s.shading in LIT_MODES and self.s.shadows != "none" and self.scene.lights:
+            needs.append(f"{self.s.shadows}_shadow")
+            self.features.add(f"shadows:{self.s.shadows}")
+        return needs
+
+    def normal_code(self) -> str:
+        """``estimate_normal`` written out for the chosen stencil (`reference_cpu.normals`)."""
+        method = self.s.normal_method
+        self.features.add(f"normals:{method}")
+        lines = [f"// Normal by finite differences, the {method!r} stencil of reference_cpu/normals.py:",
+                 "// n = normalize(sum_k k scene_sdf(p + h k)); zero where the gradient vanishes.",
+                 "vec3 estimate_normal(vec3 p)", "{", "    real h = NORMAL_STEP;",
+                 "    vec3 g = vec3(0.0);"]
+        for k in STENCILS[method]:
+            k = ", ".join(self.d.literal(c) for c in k)
+            lines.append(f"    g = g + scene_sdf(p + h * vec3({k})) * vec3({k});")
+        lines += ["    real size = sqrt(dot(g, g));",
+                  "    return size > 0.0 ? g / size : vec3(0.0);", "}", ""]
+        return "\n".join(lines)
+
+    # --- lights, materials and shading --------------------------------------------------------
+
+    def shading_parts(self) -> list[tuple[str, str]]:
+        mode = self.s.shading
+        self.features.add(f"shading:{mode}")
+        shading_lib = load_library("shading")
+        background = self.background_code()
+        if mode == "normals":
+            return [("shading (glsl/shading.glsl)", shading_lib.select(["shade_normals"] + background[1])),
+                    ("the background", background[0])]
+        if mode == "depth":
+            return [("shading (glsl/shading.glsl)", shading_lib.select(["shade_depth"] + background[1])),
+                    ("the background", background[0])]
+        if mode == "steps":
+            return [("the heat colour map (marchlab/colormaps.py)", self.heat_code())]
+        light_source, light_needs = self.light_code()
+        wanted = ["diffuse", SPECULAR[mode]] + background[1]
+        wanted += ["toon_band"] * (mode == "toon") + ["checker"] * self.checker
+        wanted += ["apply_fog"] * self.fog
+        return [
+            ("lights (glsl/lights.glsl)", load_library("lights").select(light_needs)),
+            ("shading (glsl/shading.glsl)", shading_lib.select(wanted)),
+            ("materials, indexed by object id", self.material_code()),
+            ("the background", background[0]),
+            (f"the {mode} model over the scene's lights", light_source),
+        ]
+
+    def material_code(self) -> str:
+        """Material rows per object id, and ``surface_albedo``."""
+        stride = 4 if self.checker else 2
+        first = len(self.block.rows)
+        for m in self.materials:
+            self.block.row([*m.color, m.ka])
+            self.block.row([m.kd, m.ks, m.shininess, m.kr])
+            if self.checker:
+                c = m.checker
+                self.block.row([*c.color_a, c.scale] if c else [0, 0, 0, 1])
+                self.block.row([*c.color_b, 1.0] if c else [0, 0, 0, 0])
+        lines = [f"// Row 0: (color, ka); row 1: (kd, ks, shininess, kr)"
+                 + ("; row 2: (checker color_a, scale);\n// row 3: (checker color_b, 1 if checkered)."
+                    if self.checker else "."),
+                 f"#define MATERIAL(id, row) P[{first} + {stride} * (id) + (row)]", ""]
+        lines += ["vec3 surface_albedo(vec3 p, int id)", "{"]
+        if self.checker:
+            self.features.add("checker")
+            lines += ["    if (MATERIAL(id, 3).w > 0.0) {",
+                      "        return checker(p, MATERIAL(id, 2).xyz, MATERIAL(id, 3).xyz, MATERIAL(id, 2).w);",
+                      "    }"]
+        lines += ["    return MATERIAL(id, 0).xyz;", "}", ""]
+        return "\n".join(lines)
+
+    def light_code(self) -> tuple[str, list[str]]:
+        """The shading function, one block per light, and the light functions it calls."""
+        mode, b, needs = self.s.shading, self.block, set()
+        term = {"phong": "diffuse(n, s.to_light)", "blinn_phong": "diffuse(n, s.to_light)",
+                "toon": "toon_band(diffuse(n, s.to_light), TOON_BANDS)"}[mode]
+        spec = f"{SPECULAR[mode]}(n, s.to_light, v, shininess)"
+        if mode == "toon":
+            spec = f"toon_band({spec}, TOON_BANDS)"
+        lines = [f"// The {mode} model (reference_cpu/shading.py) summed over the lights, plus ambient.",
+                 f"vec3 shade_{mode}(vec3 p, vec3 n, vec3 v, int id)", "{",
+                 "    vec3 albedo = surface_albedo(p, id);",
+                 "    real ka = MATERIAL(id, 0).w;",
+                 "    real kd = MATERIAL(id, 1).x;",
+                 "    real ks = MATERIAL(id, 1).y;",
+                 "    real shininess = MATERIAL(id, 1).z;",
+                 "    vec3 color = ka * albedo * AMBIENT;",
+                 "    LightSample s;"]
+        for i, light in enumerate(self.scene.lights):
+            kind = LIGHT_KINDS.get(type(light))
+            if kind is None:
+                raise MarchlabError(f"the shader generator does not support lights of type "
+                                    f"{type(light).__name__} yet; render with --backend numpy")
+            self.features.add(f"light:{kind}")
+            needs.add(f"light_{kind}")
+            radiance = np.multiply(light.color, light.intensity)
+            L = f"LIGHT{i}_"
+            if kind == "directional":
+                direction = np.asarray(light.direction, dtype=np.float64)
+                b.named({L + "TO_LIGHT": ("xyz", -direction / np.linalg.norm(direction))})
+                b.named({L + "RADIANCE": ("xyz", radiance)})
+                call = f"light_directional({L}TO_LIGHT, {L}RADIANCE)"
+            else:
+                b.named({L + "POSITION": ("xyz", light.position)})
+                b.named({L + "RADIANCE": ("xyz", radiance)})
+                b.named({L + "ATTENUATION": ("xyz", (light.constant, light.linear, light.quadratic))})
+                call = f"light_point(p, {L}POSITION, {L}RADIANCE, {L}ATTENUATION)"
+            if kind == "spot":
+                axis = np.asarray(light.direction, dtype=np.float64)
+                cos_inner = math.cos(math.radians(light.inner_angle))
+                cos_outer = math.cos(math.radians(light.outer_angle))
+                b.named({L + "AXIS": ("xyz", axis / np.linalg.norm(axis))})
+                b.named({L + "CONE": ("xy", (cos_outer, cos_inner - cos_outer))})
+                call = f"light_spot(p, {L}POSITION, {L}RADIANCE, {L}ATTENUATION, {L}AXIS, {L}CONE)"
+            lines += [f"    // light {i}: {kind}", f"    s = {call};"]
+            if self.s.shadows != "none":
+                lines.append("    s.radiance = light_visible(p, n, s) * s.radiance;")
+            lines.append(f"    color = color + s.radiance * (kd * {term} * albedo + ks * {spec});")
+        lines += ["    return color;", "}", ""]
+        source = "\n".join(lines)
+        if self.s.shadows != "none" and self.scene.lights:
+            source = self.shadow_code() + "\n" + source
+        return source, sorted(needs)
+
+    def shadow_code(self) -> str:
+        return "\n".join([
+            "// How much of light s reaches p: shadow rays start SURFACE_OFFSET off the surface",
+            "// (else they find the surface itself: shadow acne). Points facing away from the",
+            "// light, or where it sends nothing, get none and need no shadow ray.",
+            "real light_visible(vec3 p, vec3 n, LightSample s)",
+            "{",
+            "    if (!(dot(n, s.to_light) > 0.0 && max(s.radiance.x, max(s.radiance.y, s.radiance.z)) > 0.0)) {",
+            "        return 0.0;",
+            "    }",
+            "    vec3 origin = p + SURFACE_OFFSET * n;",
+            f"    return {self.s.shadows}_shadow(origin, s.to_light, s.distance);",
+            "}", ""])
+
+    def background_code(self) -> tuple[str, list[str]]:
+        bg = self.s.background
+        self.features.add(f"background:{bg.kind}")
+        if bg.kind == "solid":
+            self.block.named({"BACKGROUND_COLOR": ("xyz", bg.color)})
+            call, needs = "background_solid(direction, BACKGROUND_COLOR)", ["background_solid"]
+        else:
+            self.block.named({"BACKGROUND_BOTTOM": ("xyz", bg.bottom)})
+            self.block.named({"BACKGROUND_TOP": ("xyz", bg.top)})
+            call, needs = ("background_sky(direction, BACKGROUND_BOTTOM, BACKGROUND_TOP)",
+                           ["background_sky"])
+        return f"vec3 background(vec3 direction)\n{{\n    return {call};\n}}\n", needs
+
+    def heat_code(self) -> str:
+        """``heat`` by linear interpolation between the stops of `marchlab.colormaps`."""
+        lit = self.d.literal
+        lines = ["// The heat ramp of marchlab/colormaps.py: linear between its stops.",
+                 "vec3 heat(real x)", "{", "    x = clamp(x, 0.0, 1.0);"]
+        for i in range(len(HEAT_STOPS) - 1):
+            x0, x1 = HEAT_STOPS[i], HEAT_STOPS[i + 1]
+            c0 = ", ".join(lit(c) for c in HEAT_COLORS[i])
+            c1 = ", ".join(lit(c) for c in HEAT_COLORS[i + 1])
+            test = f"if (x <= {lit(x1)}) " if i < len(HEAT_STOPS) - 2 else ""
+            lines.append(f"    {test}return vec3({c0}) + (vec3({c1}) - vec3({c0})) * "
+                         f"((x - {lit(x0)}) / {lit(x1 - x0)});")
+        lines += ["}", ""]
+        return "\n".join(lines)
+
+    # --- the per-pixel pipeline -----------------------------------------------------------------
+
+    def pixel_code(self) -> str:
+        mode = self.s.shading
+        head = ["// The colour of one pixel, given its primary ray, the march result h and, on a hit,",
+                "// the normal n and object id there (reference_cpu/render.py, Tracer.trace).",
+                "vec3 pixel_color(vec3 origin, vec3 direction, Hit h, vec3 n, int id)", "{"]
+        if mode == "steps":
+            body = [f"    return heat({self.d.to_real('h.steps')} / {self.d.to_real('MAX_STEPS')});"]
+        elif mode == "normals":
+            body = ["    return h.hit == 1 ? shade_normals(n) : background(direction);"]
+        elif mode == "depth":
+            body = ["    return h.hit == 1 ? shade_depth(h.t, MAX_DISTANCE) : background(direction);"]
+        else:
+            return self.lit_pixel_code(head)
+        return "\n".join(head + body + ["}", ""])
+
+    def lit_pixel_code(self, head: list[str]) -> str:
+        """Shading, fog and (if any material is a mirror) source 000's reflection loop."""
+        shade = f"shade_{self.s.shading}(p, n, -d, id)"
+        fog = ["        shaded = apply_fog(shaded, h.t, FOG_COLOR, FOG_DENSITY);"] if self.fog else []
+        if not self.reflections:
+            return "\n".join(head + [
+                "    if (h.hit == 0) {", "        return background(direction);", "    }",
+                "    vec3 d = direction;",
+                "    precise vec3 p = origin + h.t * d;",
+                f"    vec3 shaded = {shade};"] + [f[4:] for f in fog] + [
+                "    return shaded;", "}", ""])
+        self.features.add("reflections")
+        lines = head + [
+            "    // Each bounce adds its shaded colour weighted by the product of the kr seen",
+            "    // so far; a ray that hits nothing adds the background.",
+            "    vec3 color = vec3(0.0);",
+            "    real weight = 1.0;",
+            "    vec3 o = origin;",
+            "    vec3 d = direction;",
+            "    for (int bounce = 0; bounce <= REFLECTION_DEPTH; bounce++) {",
+            "        if (bounce > 0) {",
+            "            h = march(o, d, MAX_DISTANCE);",
+            "        }",
+            "        if (h.hit == 0) {",
+            "            color = color + weight * background(d);",
+            "            break;",
+            "        }",
+            "        precise vec3 p = o + h.t * d;",
+            "        if (bounce > 0) {",
+            "            n = estimate_normal(p);",
+            "            id = scene_object_id(p);",
+            "        }",
+            f"        vec3 shaded = {shade};"] + fog + [
+            "        color = color + weight * shaded;",
+            "        weight = weight * MATERIAL(id, 1).w;",
+            "        if (bounce == REFLECTION_DEPTH || !(weight > 0.0)) {",
+            "            break;",
+            "        }",
+            "        // Continue just off the mirror, in the mirrored direction.",
+            "        o = p + SURFACE_OFFSET * n;",
+            "        d = reflect(d, n);",
+            "    }",
+            "    return color;", "}", ""]
+        return "\n".join(lines)
+
+
+def _banner(title: str) -> str:
+    return f"// ---- {title} " + "-" * max(4, 86 - len(title)) + "\n\n"

@@ -1,0 +1,29 @@
+// The fragment shader's entry point: one invocation per pixel. It writes every buffer of a
+// marchlab Frame into three RGBA32F render targets in one draw.
+
+layout(location = 0) out vec4 out_color;     // rgb: colour in [0, 1], a: 1 on a hit
+layout(location = 1) out vec4 out_normal;    // xyz: unit normal, w: depth t (-1 on a miss)
+layout(location = 2) out vec4 out_steps;     // x: SDF evaluations, y: object id (-1)
+
+void main()
+{
+    // gl_FragCoord is the pixel centre counted from the bottom-left corner; marchlab counts
+    // rows from the top. Both coordinates are exact in float (integers + 0.5).
+    real x = gl_FragCoord.x;
+    real y = IMAGE_HEIGHT - gl_FragCoord.y;
+    vec3 direction = camera_ray(x, y);
+    Hit h = march(CAMERA_POSITION, direction, MAX_DISTANCE);
+
+    vec3 n = vec3(0.0);
+    int id = -1;
+    if (h.hit == 1) {
+        precise vec3 p = CAMERA_POSITION + h.t * direction;
+        n = estimate_normal(p);
+        id = scene_object_id(p);
+    }
+    vec3 color = clamp(pixel_color(CAMERA_POSITION, direction, h, n, id), 0.0, 1.0);
+
+    out_color = vec4(color, float(h.hit));
+    out_normal = vec4(n, h.t);
+    out_steps = vec4(float(h.steps), float(id), 0.0, 0.0);
+}

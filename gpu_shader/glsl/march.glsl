@@ -1,0 +1,66 @@
+// Sphere tracing (Hart 1996) and shadow rays: the GLSL twins of reference_cpu/march.py and
+// reference_cpu/shadows.py. The rules are marchlab's contract (docs/scene-format.md):
+//
+//   step i (1-based) evaluates d_i = |scene_sdf(o + t d)|; `steps` counts the evaluations;
+//   if d_i < EPSILON the ray hits at the current t;
+//   else t += d_i, and if t > limit the ray misses;
+//   after MAX_STEPS evaluations without a hit the ray misses.
+//
+// `precise` keeps the compiler from fusing o + t d into one rounding (an FMA), which would
+// move the point a little differently from the reference.
+
+Hit march(vec3 origin, vec3 direction, real limit)
+{
+    Hit result;
+    result.t = -1.0;
+    result.steps = MAX_STEPS;
+    result.hit = 0;
+    precise real t = 0.0;
+    for (int step = 1; step <= MAX_STEPS; step++) {
+        precise vec3 p = origin + t * direction;
+        real d = abs(scene_sdf(p));
+        if (d < EPSILON) {
+            result.t = t;
+            result.steps = step;
+            result.hit = 1;
+            return result;
+        }
+        t = t + d;
+        if (t > limit) {
+            result.steps = step;
+            return result;
+        }
+    }
+    return result;
+}
+
+// 1 where the light is visible, 0 where the shadow ray hits something first. `origin` is
+// the surface point already pushed off the surface along its normal.
+real hard_shadow(vec3 origin, vec3 to_light, real light_distance)
+{
+    return march(origin, to_light, min(light_distance, MAX_DISTANCE)).hit == 1 ? 0.0 : 1.0;
+}
+
+// Penumbra estimate in [0, 1] (Quilez, "Soft shadows in raymarched SDFs", 2010): the same
+// march, keeping the smallest k h / t seen after the first step; 0 if the ray hits.
+real soft_shadow(vec3 origin, vec3 to_light, real light_distance)
+{
+    real limit = min(light_distance, MAX_DISTANCE);
+    real visible = 1.0;
+    precise real t = 0.0;
+    for (int step = 1; step <= MAX_STEPS; step++) {
+        precise vec3 p = origin + t * to_light;
+        real h = abs(scene_sdf(p));
+        if (step > 1) {
+            visible = min(visible, PENUMBRA_K * h / t);
+        }
+        if (h < EPSILON) {
+            return 0.0;
+        }
+        t = t + h;
+        if (t > limit) {
+            break;
+        }
+    }
+    return clamp(visible, 0.0, 1.0);
+}

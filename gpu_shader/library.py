@@ -1,0 +1,104 @@
+"""The hand-written shader building blocks (``glsl/*.glsl``) and how only the needed ones are picked.
+
+Each ``.glsl`` file is a library of functions, each preceded by its comment. The generator
+asks for functions by name (``sdf_sphere``, ``op_union``, ...); `Library.select` returns those
+and every library function they call, in file order, with their comments, so a shader holds
+exactly what its scene uses.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from functools import cache
+from pathlib import Path
+
+GLSL_DIR = Path(__file__).parent / "glsl"
+
+# A top-level function definition: "type name(" at the start of a line.
+_DEFINITION = re.compile(r"^(?:\w+)\s+(\w+)\s*\(", re.M)
+_WORD = re.compile(r"\b\w+\b")
+
+
+@dataclass(frozen=True)
+class Function:
+    """One function of a library file: its name, its text (comment included), who it calls."""
+    name: str
+    text: str
+    calls: frozenset[str]
+
+
+@dataclass(frozen=True)
+class Library:
+    """The functions of one building-block file, in file order, and the file's header comment."""
+    header: str
+    functions: tuple[Function, ...]
+
+    def names(self) -> list[str]:
+        return [f.name for f in self.functions]
+
+    def select(self, wanted) -> str:
+        """Source text of the functions in ``wanted`` and of everything they call."""
+        by_name = {f.name: f for f in self.functions}
+        unknown = set(wanted) - set(by_name)
+        if unknown:
+            raise KeyError(f"not in the library: {', '.join(sorted(unknown))}")
+        needed, todo = set(), list(wanted)
+        while todo:
+            name = todo.pop()
+            if name not in needed:
+                needed.add(name)
+                todo.extend(by_name[name].calls)
+        return "\n".join(f.text for f in self.functions if f.name in needed)
+
+
+@cache
+def load_library(name: str) -> Library:
+    """Parse ``glsl/<name>.glsl`` into its functions."""
+    text = (GLSL_DIR / f"{name}.glsl").read_text()
+    blocks = _split_blocks(text)
+    header, blocks = blocks[0], blocks[1:]
+    names = [_DEFINITION.search(b).group(1) for b in blocks]
+    functions = []
+    for name_, block in zip(names, blocks):
+        body = block[block.index("{"):]
+        calls = {w for w in _WORD.findall(body) if w in names and w != name_}
+        functions.append(Function(name_, block, frozenset(calls)))
+    return Library(header, tuple(functions))
+
+
+def _split_blocks(text: str) -> list[str]:
+    """The file's header, then one block per function: its leading comment and its body.
+
+    A block ends at a closing brace in column 0; blank lines separate blocks; section
+    comments ("// --- ...") between functions are dropped, as they introduce groups that a
+    generated shader may include only part of.
+    """
+    lines = text.splitlines()
+    blocks, current, in_body = [], [], False
+    for line in lines:
+        if not in_body and not line.strip():
+            if current:
+                blocks.append(current)
+                current = []
+            continue
+        if not in_body and line.startswith("// ---"):
+            continue
+        current.append(line)
+        if _DEFINITION.match(line):
+            in_body = True
+        elif in_body and line.startswith("}"):
+            in_body = False
+            blocks.append(current)
+            current = []
+    if current:
+        blocks.append(current)
+    header, rest = [], []
+    for block in blocks:
+        if any(_DEFINITION.match(line) for line in block):
+            rest.append(block)
+        elif not rest:
+            header.append(block)
+    # Only the file's first comment block is its header; later free comments are dropped.
+    head = "\n".join(header[0]) if header else ""
+    return [head] + ["\n".join(b) + "\n" for b in rest]

@@ -1,0 +1,158 @@
+"""The GPU backend: draw the generated fragment shader and read every buffer back.
+
+One full-screen draw writes three RGBA32F render targets (colour and hit, normal and depth,
+steps and object id); reading them back gives the same `Frame` the NumPy reference returns.
+Programs are cached by their text, which depends only on the scene's structure: a new
+camera or a moved object only rewrites the parameter buffer.
+"""
+
+from __future__ import annotations
+
+import re
+from collections import OrderedDict
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from marchlab.errors import MarchlabError
+from marchlab.frame import Frame
+from marchlab.scene import Scene
+
+from .context import gl_context, renderer_name
+from .generate import generate
+from .library import GLSL_DIR
+
+PROGRAM_CACHE_SIZE = 32
+BANDS = 8               # with a progress callback, draw in this many bands of rows
+
+
+class ShaderCompileError(MarchlabError):
+    """The driver rejected a generated shader; the message quotes the offending lines."""
+
+
+def check() -> None:
+    """Raise MarchlabError, saying what is missing, if this backend cannot run here."""
+    gl_context()
+
+
+def device_name() -> str:
+    """The OpenGL renderer the backend draws with."""
+    return renderer_name(gl_context())
+
+
+def render(scene: Scene, width: int, height: int, precision: str = "float32",
+           progress: Callable[[int, int], None] | None = None) -> Frame:
+    """Render ``scene`` on the GPU in float32 (see `marchlab.render`)."""
+    if precision != "float32":
+        raise MarchlabError(f"the gpu backend renders in float32 only (asked for {precision})")
+    return _renderer().render(scene, width, height, progress)
+
+
+_renderers: dict[int, "Renderer"] = {}
+
+
+def _renderer() -> "Renderer":
+    ctx = gl_context()
+    if id(ctx) not in _renderers:
+        _renderers[id(ctx)] = Renderer(ctx)
+    return _renderers[id(ctx)]
+
+
+class Renderer:
+    """Compiled programs and render targets on one context."""
+
+    def __init__(self, ctx):
+        self.ctx = ctx
+        self.programs: OrderedDict[str, tuple] = OrderedDict()
+        self.targets: dict[tuple[int, int], tuple] = {}
+        self.max_block = int(ctx.info["GL_MAX_UNIFORM_BLOCK_SIZE"])
+
+    def render(self, scene: Scene, width: int, height: int, progress=None) -> Frame:
+        generated = generate(scene, width, height)
+        parameters = generated.parameters.astype(np.float32)
+        if parameters.nbytes > self.max_block:
+            raise MarchlabError(
+                f"the scene needs {parameters.nbytes} bytes of shader parameters; this OpenGL "
+                f"allows {self.max_block} in a uniform block (fewer objects or lights)")
+        program, vao = self.program(generated.source)
+        fbo = self.target(width, height)
+        buffer = self.ctx.buffer(parameters.tobytes())
+        try:
+            buffer.bind_to_uniform_block(0)
+            program["Parameters"].binding = 0
+            fbo.use()
+            fbo.viewport = (0, 0, width, height)
+            self.draw(vao, width, height, progress)
+            planes = [np.frombuffer(fbo.read(components=4, attachment=i, dtype="f4"), np.float32)
+                      .reshape(height, width, 4)[::-1] for i in range(3)]
+        finally:
+            buffer.release()
+        color_hit, normal_depth, steps_id = planes
+        hit = color_hit[..., 3] > 0.5
+        return Frame(color=np.ascontiguousarray(color_hit[..., :3]),
+                     depth=np.where(hit, normal_depth[..., 3], np.float32(np.inf)),
+                     normal=np.ascontiguousarray(normal_depth[..., :3]),
+                     steps=steps_id[..., 0].astype(np.int32),
+                     object_id=np.where(hit, steps_id[..., 1], -1).astype(np.int32),
+                     hit=hit, gamma=scene.render.gamma, max_steps=scene.render.max_steps,
+                     backend="gpu", precision="float32")
+
+    def draw(self, vao, width, height, progress):
+        if progress is None:
+            vao.render(vertices=3)
+            return
+        rows = -(-height // BANDS)
+        for start in range(0, height, rows):
+            stop = min(start + rows, height)
+            # Bands from the top of the image (GL counts rows from the bottom).
+            self.ctx.scissor = (0, height - stop, width, stop - start)
+            vao.render(vertices=3)
+            self.ctx.finish()
+            progress(stop * width, height * width)
+        self.ctx.scissor = None
+
+    def program(self, source: str):
+        """The compiled program for ``source``, from the cache when it was seen before."""
+        if source in self.programs:
+            self.programs.move_to_end(source)
+            return self.programs[source]
+        vertex = (GLSL_DIR / "fullscreen.vert").read_text()
+        try:
+            program = self.ctx.program(vertex_shader=vertex, fragment_shader=source)
+        except Exception as err:
+            raise ShaderCompileError(compile_message(str(err), source)) from None
+        vao = self.ctx.vertex_array(program, [])
+        self.programs[source] = (program, vao)
+        if len(self.programs) > PROGRAM_CACHE_SIZE:
+            _, (old, old_vao) = self.programs.popitem(last=False)
+            old_vao.release()
+            old.release()
+        return program, vao
+
+    def target(self, width: int, height: int):
+        """A framebuffer of three RGBA32F textures of the given size (kept for reuse)."""
+        key = (width, height)
+        if key not in self.targets:
+            textures = [self.ctx.texture((width, height), 4, dtype="f4") for _ in range(3)]
+            self.targets[key] = self.ctx.framebuffer(color_attachments=textures)
+        return self.targets[key]
+
+
+# Driver messages name lines as "0:123(4): error" (Mesa) or "0(123) : error" (NVIDIA).
+_LINE = re.compile(r"\b0[:(](\d+)[(): ]")
+
+
+def compile_message(log: str, source: str) -> str:
+    """The compiler's first error, with the generated source lines it names."""
+    lines = source.splitlines()
+    errors = [line.strip() for line in log.splitlines() if "error" in line.lower()]
+    first = errors[0] if errors else log.strip().splitlines()[-1]
+    quoted = []
+    for match in _LINE.finditer(first):
+        number = int(match.group(1))
+        if 1 <= number <= len(lines):
+            quoted.append(f"  line {number}: {lines[number - 1].strip()}")
+    return ("generated shader failed to compile: " + first
+            + ("\n" + "\n".join(quoted) if quoted else "")
+            + "\n(`marchlab shader SCENE --numbered` prints the source with line numbers)")

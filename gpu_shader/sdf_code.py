@@ -1,0 +1,198 @@
+"""The scene's SDF tree written out as code: ``scene_sdf(p)`` and ``scene_object_id(p)``.
+
+The generated functions do what `reference_cpu.scene_sdf.build_scene_sdf` does, node by node
+and in the same order: transforms move the query point, primitives give a distance,
+operators fold their children left to right, and the object id follows the distance the
+operator chose. Each node's numbers live in the parameter block, so the text depends only on
+the tree's shape.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from marchlab.errors import MarchlabError
+from marchlab.geometry import rotation_matrix
+from marchlab.shapes import (Box, Capsule, CappedCylinder, Cone, Intersection, Node, Plane,
+                             Repeat, Rotate, RoundBox, Scale, SmoothIntersection,
+                             SmoothSubtraction, SmoothUnion, Sphere, Subtraction, Torus,
+                             Translate, Union)
+
+from .parameters import ParameterBlock
+
+# Binary operators: (library function, whether it takes k, condition keeping the first id),
+# as `reference_cpu.scene_sdf._COMBINE`.
+OPERATORS = {
+    Union: ("op_union", False, "{a} <= {b}"),
+    Intersection: ("op_intersection", False, "{a} >= {b}"),
+    Subtraction: ("op_subtraction", False, "{a} >= -{b}"),
+    SmoothUnion: ("op_smooth_union", True, "{a} <= {b}"),
+    SmoothIntersection: ("op_smooth_intersection", True, "{a} >= {b}"),
+    SmoothSubtraction: ("op_smooth_subtraction", True, "{a} >= -{b}"),
+}
+
+PRIMITIVES = {Sphere: "sdf_sphere", Box: "sdf_box", RoundBox: "sdf_round_box",
+              Plane: "sdf_plane", Torus: "sdf_torus", CappedCylinder: "sdf_capped_cylinder",
+              Capsule: "sdf_capsule", Cone: "sdf_cone"}
+
+TRANSFORMS = {Translate: "op_translate", Rotate: "op_rotate", Scale: "op_scale",
+              Repeat: "op_repeat"}
+
+
+def scene_root(objects) -> Node | None:
+    """The tree the scene's objects form: one object, or the union of all of them."""
+    if not objects:
+        return None
+    return objects[0] if len(objects) == 1 else Union(tuple(objects))
+
+
+def primitive_parameters(node: Node) -> tuple[list, list[str]]:
+    """The parameter rows of a primitive and the arguments that read them (row ``{r}``)."""
+    match node:
+        case Sphere():
+            return [[node.radius]], ["P[{r}].x"]
+        case Box():
+            return [node.half_size], ["P[{r}].xyz"]
+        case RoundBox():
+            return [[*node.half_size, node.radius]], ["P[{r}].xyz", "P[{r}].w"]
+        case Plane():
+            normal = np.divide(node.normal, np.linalg.norm(node.normal))
+            return [[*normal, node.offset]], ["P[{r}].xyz", "P[{r}].w"]
+        case Torus():
+            return [[node.major_radius, node.minor_radius]], ["P[{r}].x", "P[{r}].y"]
+        case CappedCylinder():
+            return [[node.radius, node.half_height]], ["P[{r}].x", "P[{r}].y"]
+        case Capsule():
+            return ([[*node.a, node.radius], node.b],
+                    ["P[{r}].xyz", "P[{r1}].xyz", "P[{r}].w"])
+        case Cone():
+            return [[node.radius, node.height]], ["P[{r}].x", "P[{r}].y"]
+    raise unsupported(node)
+
+
+def transform_parameters(node: Node) -> tuple[str, list, list[str]]:
+    """(function, rows, arguments) of a transform node."""
+    match node:
+        case Translate():
+            return "op_translate", [node.offset], ["P[{r}].xyz"]
+        case Rotate():
+            r = rotation_matrix(node.degrees)
+            return ("op_rotate", [r[:, 0], r[:, 1], r[:, 2]],
+                    ["P[{r}].xyz", "P[{r1}].xyz", "P[{r2}].xyz"])
+        case Scale():
+            return "op_scale", [[node.factor]], ["P[{r}].x"]
+        case Repeat(count=None):
+            return "op_repeat", [node.period], ["P[{r}].xyz"]
+        case Repeat():
+            return "op_repeat_limited", [node.period, node.count], ["P[{r}].xyz", "P[{r1}].xyz"]
+    raise unsupported(node)
+
+
+def unsupported(node: Node) -> MarchlabError:
+    kind = getattr(node, "kind", "") or type(node).__name__
+    return MarchlabError(f"the shader generator does not support {kind!r} "
+                         f"({type(node).__name__}) nodes yet; render this scene with "
+                         "--backend numpy")
+
+
+class SdfWriter:
+    """Writes the body of ``scene_sdf`` (distances) or ``scene_object_id`` (distances and ids).
+
+    Both walks visit the tree in the same order, so they allocate the same parameter rows;
+    the second walk is given the rows the first allocated (``replay``) and checks them.
+    """
+
+    def __init__(self, block: ParameterBlock, with_ids: bool, replay: list[int] | None = None):
+        self.block, self.with_ids = block, with_ids
+        self.lines: list[str] = []
+        self.used: set[str] = set()              # library functions called
+        self.rows: list[int] = []                # first row of each node, in visit order
+        self._replay = iter(replay) if replay is not None else None
+        self._names = 0
+        self._next_id = 0
+
+    def allocate(self, rows) -> int:
+        if self._replay is not None:
+            first = next(self._replay)
+        else:
+            first = len(self.block.rows)
+            for values in rows:
+                self.block.row(values)
+        self.rows.append(first)
+        return first
+
+    def name(self, prefix: str) -> str:
+        self._names += 1
+        return f"{prefix}{self._names}"
+
+    def call(self, function: str, args: list[str], first_row: int) -> str:
+        rows = {"r": first_row, "r1": first_row + 1, "r2": first_row + 2}
+        self.used.add(function)
+        return f"{function}({', '.join(a.format(**rows) for a in args)})"
+
+    def node(self, node: Node, p: str) -> tuple[str, str]:
+        """Emit code for ``node`` at query point ``p``; return (distance variable, id expression)."""
+        if type(node) in PRIMITIVES:
+            object_id = self._next_id
+            self._next_id += 1
+            rows, args = primitive_parameters(node)
+            first = self.allocate(rows)
+            d = self.name("d")
+            self.lines.append(f"// object {object_id}: {node.kind}, material {node.material!r}")
+            self.lines.append(f"real {d} = {self.call(PRIMITIVES[type(node)], [p] + args, first)};")
+            return d, str(object_id)
+        if type(node) in TRANSFORMS:
+            function, rows, args = transform_parameters(node)
+            first = self.allocate(rows)
+            q = self.name("p")
+            self.lines.append(f"vec3 {q} = {self.call(function, [p] + args, first)};")
+            d, ids = self.node(node.child, q)
+            if isinstance(node, Scale):                  # scale the distance back
+                self.lines.append(f"{d} = {d} * P[{first}].x;")
+            return d, ids
+        if type(node) in OPERATORS:
+            return self.combine(node, p)
+        raise unsupported(node)
+
+    def combine(self, node: Node, p: str) -> tuple[str, str]:
+        """Fold the children left to right, as the reference does."""
+        function, takes_k, keeps_first = OPERATORS[type(node)]
+        first = self.allocate([[node.k]] if takes_k else [])
+        k = [f"P[{first}].x"] if takes_k else []
+        d, ids = self.node(node.children[0], p)
+        result, result_id = self.name("d"), self.name("id")
+        self.lines.append(f"real {result} = {d};")
+        if self.with_ids:
+            self.lines.append(f"int {result_id} = {ids};")
+        for child in node.children[1:]:
+            d2, ids2 = self.node(child, p)
+            if self.with_ids:
+                condition = keeps_first.format(a=result, b=d2)
+                self.lines.append(f"{result_id} = {condition} ? {result_id} : {ids2};")
+            self.used.add(function)
+            args = ", ".join([result, d2] + k)
+            self.lines.append(f"{result} = {function}({args});"
+                              + ("  // " + node.kind if not self.with_ids else ""))
+        return result, result_id
+
+
+def scene_sdf_code(objects, block: ParameterBlock) -> tuple[str, set[str]]:
+    """Source of ``scene_sdf`` and ``scene_object_id`` and the library functions they use."""
+    root = scene_root(objects)
+    if root is None:
+        return ("// An empty scene: every ray misses.\n"
+                "real scene_sdf(vec3 p)\n{\n    return MAX_DISTANCE * 2.0;\n}\n\n"
+                "int scene_object_id(vec3 p)\n{\n    return -1;\n}\n"), set()
+    distances = SdfWriter(block, with_ids=False)
+    d, _ = distances.node(root, "p")
+    ids = SdfWriter(block, with_ids=True, replay=distances.rows)
+    _, object_id = ids.node(root, "p")
+    body = "".join(f"    {line}\n" for line in distances.lines)
+    id_body = "".join(f"    {line}\n" for line in ids.lines)
+    source = (
+        "// The distance from p to the nearest surface of the scene.\n"
+        f"real scene_sdf(vec3 p)\n{{\n{body}    return {d};\n}}\n\n"
+        "// The object id (depth-first index of the primitive) whose distance the tree\n"
+        "// chose at p: the same walk, keeping track of ids.\n"
+        f"int scene_object_id(vec3 p)\n{{\n{id_body}    return {object_id};\n}}\n")
+    return source, distances.used
