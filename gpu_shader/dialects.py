@@ -29,7 +29,7 @@ class Dialect:
     struct: Callable[[str, tuple], str]           # a struct declaration
     to_real: Callable[[str], str]                 # int expression -> real
     to_int: Callable[[str], str]                  # real expression -> int
-    declare_parameters: Callable[[int], str]      # how the program receives P[rows]
+    declare_parameters: Callable[[int, int], str] # how the program receives U and P
     real_dtype: np.dtype                          # precision of `real`
 
     def literal(self, value: float) -> str:
@@ -43,6 +43,29 @@ class Dialect:
 def _glsl_struct(name: str, fields) -> str:
     body = "".join(f"    {type_} {field};\n" for type_, field in fields)
     return f"struct {name}\n{{\n{body}}};\n"
+
+
+def _glsl_parameters(rows: int, fixed: int) -> str:
+    return f"""\
+layout(std140) uniform Parameters
+{{
+    vec4 U[{rows}];
+}};
+
+// The first {fixed} rows, read with fixed indices (camera, settings, SDF tree, lights), are
+// copied once per pixel into the private array P. llvmpipe re-reads and bounds-checks a
+// uniform buffer at every use, which made the march loop three times slower; a GPU keeps
+// a private array read with constant indices in registers. Materials, read by object id,
+// stay in U.
+vec4 P[{fixed}];
+
+void load_parameters()
+{{
+    for (int i = 0; i < {fixed}; i++) {{
+        P[i] = U[i];
+    }}
+}}
+"""
 
 
 GLSL = Dialect(
@@ -60,8 +83,7 @@ GLSL = Dialect(
     struct=_glsl_struct,
     to_real=lambda expr: f"float({expr})",
     to_int=lambda expr: f"int({expr})",
-    declare_parameters=lambda rows: (
-        f"layout(std140) uniform Parameters\n{{\n    vec4 P[{rows}];\n}};\n"),
+    declare_parameters=lambda rows, fixed: _glsl_parameters(rows, fixed),
     real_dtype=np.dtype(np.float32),
 )
 

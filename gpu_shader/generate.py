@@ -90,11 +90,15 @@ class _Generator:
             ("surface normals", self.normal_code()),
         ]
         parts += self.shading_parts()
+        # Materials are read by object id; their rows come last, outside the private copy.
+        fixed = len(self.block.rows)
+        if self.s.shading in LIT_MODES:
+            parts.insert(-1, ("materials, indexed by object id", self.material_code()))
         parts.append(("the per-pixel pipeline (reference_cpu/render.py)", self.pixel_code()))
         parts.append(("the entry point (glsl/main.frag)", (GLSL_DIR / "main.frag").read_text()))
         rows = max(1, len(self.block.rows))
         head = [self.d.prelude, _banner("parameters: one vec4 row each, set per frame")
-                + self.d.declare_parameters(rows)]
+                + self.d.declare_parameters(rows, max(1, fixed))]
         head.append(self.block.defines())
         head.append(self.d.structs())
         body = [_banner(title) + text for title, text in parts if text]
@@ -171,7 +175,6 @@ class _Generator:
         return [
             ("lights (glsl/lights.glsl)", load_library("lights").select(light_needs)),
             ("shading (glsl/shading.glsl)", shading_lib.select(wanted)),
-            ("materials, indexed by object id", self.material_code()),
             ("the background", background[0]),
             (f"the {mode} model over the scene's lights", light_source),
         ]
@@ -190,7 +193,7 @@ class _Generator:
         lines = [f"// Row 0: (color, ka); row 1: (kd, ks, shininess, kr)"
                  + ("; row 2: (checker color_a, scale);\n// row 3: (checker color_b, 1 if checkered)."
                     if self.checker else "."),
-                 f"#define MATERIAL(id, row) P[{first} + {stride} * (id) + (row)]", ""]
+                 f"#define MATERIAL(id, row) U[{first} + {stride} * (id) + (row)]", ""]
         lines += ["vec3 surface_albedo(vec3 p, int id)", "{"]
         if self.checker:
             self.features.add("checker")

@@ -2,6 +2,7 @@
 
 One full-screen draw writes three RGBA32F render targets (colour and hit, normal and depth,
 steps and object id); reading them back gives the same `Frame` the NumPy reference returns.
+GL row r holds image row r counted from the top, so the read-back needs no flip.
 Programs are cached by their text, which depends only on the scene's structure: a new
 camera or a moved object only rewrites the parameter buffer.
 """
@@ -84,15 +85,16 @@ class Renderer:
             fbo.use()
             fbo.viewport = (0, 0, width, height)
             self.draw(vao, width, height, progress)
-            planes = [np.frombuffer(fbo.read(components=4, attachment=i, dtype="f4"), np.float32)
-                      .reshape(height, width, 4)[::-1] for i in range(3)]
+            planes = np.empty((3, height, width, 4), np.float32)
+            for i in range(3):
+                fbo.read_into(planes[i], components=4, attachment=i, dtype="f4")
         finally:
             buffer.release()
         color_hit, normal_depth, steps_id = planes
         hit = color_hit[..., 3] > 0.5
-        return Frame(color=np.ascontiguousarray(color_hit[..., :3]),
+        return Frame(color=color_hit[..., :3],
                      depth=np.where(hit, normal_depth[..., 3], np.float32(np.inf)),
-                     normal=np.ascontiguousarray(normal_depth[..., :3]),
+                     normal=normal_depth[..., :3],
                      steps=steps_id[..., 0].astype(np.int32),
                      object_id=np.where(hit, steps_id[..., 1], -1).astype(np.int32),
                      hit=hit, gamma=scene.render.gamma, max_steps=scene.render.max_steps,
@@ -105,8 +107,7 @@ class Renderer:
         rows = -(-height // BANDS)
         for start in range(0, height, rows):
             stop = min(start + rows, height)
-            # Bands from the top of the image (GL counts rows from the bottom).
-            self.ctx.scissor = (0, height - stop, width, stop - start)
+            self.ctx.scissor = (0, start, width, stop - start)
             vao.render(vertices=3)
             self.ctx.finish()
             progress(stop * width, height * width)

@@ -7,10 +7,12 @@ layout(location = 2) out vec4 out_steps;     // x: SDF evaluations, y: object id
 
 void main()
 {
-    // gl_FragCoord is the pixel centre counted from the bottom-left corner; marchlab counts
-    // rows from the top. Both coordinates are exact in float (integers + 0.5).
+    load_parameters();
+    // gl_FragCoord is the pixel centre (column + 0.5, GL row + 0.5), exact in float. GL row r
+    // holds marchlab's row r (counted from the top): the image is stored top row first, so
+    // reading it back needs no flip.
     real x = gl_FragCoord.x;
-    real y = IMAGE_HEIGHT - gl_FragCoord.y;
+    real y = gl_FragCoord.y;
     vec3 direction = camera_ray(x, y);
     Hit h = march(CAMERA_POSITION, direction, MAX_DISTANCE);
 
