@@ -161,16 +161,17 @@ class _Generator:
         shading_lib = load_library("shading")
         background = self.background_code()
         if mode == "normals":
-            return [("shading (glsl/shading.glsl)", shading_lib.select(["shade_normals"] + background[1])),
+            return [("shading (glsl/shading.glsl)", shading_lib.select(["shade_normals", "path_step"] + background[1])),
                     ("the background", background[0])]
         if mode == "depth":
-            return [("shading (glsl/shading.glsl)", shading_lib.select(["shade_depth"] + background[1])),
+            return [("shading (glsl/shading.glsl)", shading_lib.select(["shade_depth", "path_step"] + background[1])),
                     ("the background", background[0])]
         if mode == "steps":
-            return [("the heat colour map (marchlab/colormaps.py)", self.heat_code())]
+            return [("the path label (glsl/shading.glsl)", shading_lib.select(["path_step"])),
+                    ("the heat colour map (marchlab/colormaps.py)", self.heat_code())]
         light_source, light_needs = self.light_code()
         wanted = ["diffuse", SPECULAR[mode]] + background[1]
-        wanted += ["toon_band"] * (mode == "toon") + ["checker"] * self.checker
+        wanted += ["toon_band"] * (mode == "toon") + ["checker"] * self.checker + ["path_step"]
         wanted += ["apply_fog"] * self.fog
         return [
             ("lights (glsl/lights.glsl)", load_library("lights").select(light_needs)),
@@ -201,6 +202,10 @@ class _Generator:
                       "        return checker(p, MATERIAL(id, 2).xyz, MATERIAL(id, 3).xyz, MATERIAL(id, 2).w);",
                       "    }"]
         lines += ["    return MATERIAL(id, 0).xyz;", "}", ""]
+        if self.checker:
+            lines += ["real surface_checker_parity(vec3 p, int id)", "{",
+                      "    return MATERIAL(id, 3).w > 0.0 ? checker_parity(p, MATERIAL(id, 2).w) : 0.0;",
+                      "}", ""]
         return "\n".join(lines)
 
     def light_code(self) -> tuple[str, list[str]]:
@@ -212,13 +217,17 @@ class _Generator:
         if mode == "toon":
             spec = f"toon_band({spec}, TOON_BANDS)"
         lines = [f"// The {mode} model (reference_cpu/shading.py) summed over the lights, plus ambient.",
-                 f"vec3 shade_{mode}(vec3 p, vec3 n, vec3 v, int id)", "{",
+                 "// Returns (colour, features): features codes the checker cell and, one bit per",
+                 "// light, whether a hard shadow blocked it (for the path label).",
+                 f"vec4 shade_{mode}(vec3 p, vec3 n, vec3 v, int id)", "{",
                  "    vec3 albedo = surface_albedo(p, id);",
                  "    real ka = MATERIAL(id, 0).w;",
                  "    real kd = MATERIAL(id, 1).x;",
                  "    real ks = MATERIAL(id, 1).y;",
                  "    real shininess = MATERIAL(id, 1).z;",
                  "    vec3 color = ka * albedo * AMBIENT;",
+                 f"    real features = {'surface_checker_parity(p, id)' if self.checker else '0.0'};",
+                 "    real visible;",
                  "    LightSample s;"]
         for i, light in enumerate(self.scene.lights):
             kind = LIGHT_KINDS.get(type(light))
@@ -248,9 +257,14 @@ class _Generator:
                 call = f"light_spot(p, {L}POSITION, {L}RADIANCE, {L}ATTENUATION, {L}AXIS, {L}CONE)"
             lines += [f"    // light {i}: {kind}", f"    s = {call};"]
             if self.s.shadows != "none":
-                lines.append("    s.radiance = light_visible(p, n, s) * s.radiance;")
+                lines.append("    visible = light_visible(p, n, s);")
+                lines.append("    s.radiance = visible * s.radiance;")
+                blocked = "(visible == 0.0 ? 1.0 : 0.0)" if self.s.shadows == "hard" else "0.0"
+                lines.append(f"    features = 2.0 * features + {blocked};")
+            else:
+                lines.append("    features = 2.0 * features;")
             lines.append(f"    color = color + s.radiance * (kd * {term} * albedo + ks * {spec});")
-        lines += ["    return color;", "}", ""]
+        lines += ["    return vec4(color, features);", "}", ""]
         source = "\n".join(lines)
         if self.s.shadows != "none" and self.scene.lights:
             source = self.shadow_code() + "\n" + source
@@ -260,11 +274,12 @@ class _Generator:
         return "\n".join([
             "// How much of light s reaches p: shadow rays start SURFACE_OFFSET off the surface",
             "// (else they find the surface itself: shadow acne). Points facing away from the",
-            "// light, or where it sends nothing, get none and need no shadow ray.",
+            "// light, or where it sends nothing, need no shadow ray: their diffuse and",
+            "// specular terms are zero whatever the visibility, taken as 1.",
             "real light_visible(vec3 p, vec3 n, LightSample s)",
             "{",
             "    if (!(dot(n, s.to_light) > 0.0 && max(s.radiance.x, max(s.radiance.y, s.radiance.z)) > 0.0)) {",
-            "        return 0.0;",
+            "        return 1.0;",
             "    }",
             "    vec3 origin = p + SURFACE_OFFSET * n;",
             f"    return {self.s.shadows}_shadow(origin, s.to_light, s.distance);",
@@ -302,35 +317,42 @@ class _Generator:
 
     def pixel_code(self) -> str:
         mode = self.s.shading
-        head = ["// The colour of one pixel, given its primary ray, the march result h and, on a hit,",
-                "// the normal n and object id there (reference_cpu/render.py, Tracer.trace).",
-                "vec3 pixel_color(vec3 origin, vec3 direction, Hit h, vec3 n, int id)", "{"]
+        head = ["// The colour of one pixel and its path label, given its primary ray, the march",
+                "// result h and, on a hit, the normal n and object id there",
+                "// (reference_cpu/render.py, Tracer.trace).",
+                "vec4 pixel_color(vec3 origin, vec3 direction, Hit h, vec3 n, int id)", "{"]
+        path = f"{self.d.to_real('path_step(0u, id, 0u)')}"
         if mode == "steps":
-            body = [f"    return heat({self.d.to_real('h.steps')} / {self.d.to_real('MAX_STEPS')});"]
+            color = f"heat({self.d.to_real('h.steps')} / {self.d.to_real('MAX_STEPS')})"
         elif mode == "normals":
-            body = ["    return h.hit == 1 ? shade_normals(n) : background(direction);"]
+            color = "h.hit == 1 ? shade_normals(n) : background(direction)"
         elif mode == "depth":
-            body = ["    return h.hit == 1 ? shade_depth(h.t, MAX_DISTANCE) : background(direction);"]
+            color = "h.hit == 1 ? shade_depth(h.t, MAX_DISTANCE) : background(direction)"
         else:
             return self.lit_pixel_code(head)
-        return "\n".join(head + body + ["}", ""])
+        return "\n".join(head + [f"    return vec4({color}, {path});", "}", ""])
 
     def lit_pixel_code(self, head: list[str]) -> str:
         """Shading, fog and (if any material is a mirror) source 000's reflection loop."""
         shade = f"shade_{self.s.shading}(p, n, -d, id)"
         fog = ["        shaded = apply_fog(shaded, h.t, FOG_COLOR, FOG_DENSITY);"] if self.fog else []
+        to_real = self.d.to_real
         if not self.reflections:
             return "\n".join(head + [
-                "    if (h.hit == 0) {", "        return background(direction);", "    }",
+                "    if (h.hit == 0) {",
+                f"        return vec4(background(direction), {to_real('path_step(0u, -1, 0u)')});",
+                "    }",
                 "    vec3 d = direction;",
                 "    precise vec3 p = origin + h.t * d;",
-                f"    vec3 shaded = {shade};"] + [f[4:] for f in fog] + [
-                "    return shaded;", "}", ""])
+                f"    vec4 lit = {shade};",
+                "    vec3 shaded = lit.xyz;"] + [f[4:] for f in fog] + [
+                f"    return vec4(shaded, {to_real('path_step(0u, id, uint(lit.w))')});", "}", ""])
         self.features.add("reflections")
         lines = head + [
             "    // Each bounce adds its shaded colour weighted by the product of the kr seen",
             "    // so far; a ray that hits nothing adds the background.",
             "    vec3 color = vec3(0.0);",
+            "    uint path = 0u;",
             "    real weight = 1.0;",
             "    vec3 o = origin;",
             "    vec3 d = direction;",
@@ -340,6 +362,7 @@ class _Generator:
             "        }",
             "        if (h.hit == 0) {",
             "            color = color + weight * background(d);",
+            "            path = path_step(path, -1, 0u);",
             "            break;",
             "        }",
             "        precise vec3 p = o + h.t * d;",
@@ -347,8 +370,10 @@ class _Generator:
             "            n = estimate_normal(p);",
             "            id = scene_object_id(p);",
             "        }",
-            f"        vec3 shaded = {shade};"] + fog + [
+            f"        vec4 lit = {shade};",
+            "        vec3 shaded = lit.xyz;"] + fog + [
             "        color = color + weight * shaded;",
+            "        path = path_step(path, id, uint(lit.w));",
             "        weight = weight * MATERIAL(id, 1).w;",
             "        if (bounce == REFLECTION_DEPTH || !(weight > 0.0)) {",
             "            break;",
@@ -357,7 +382,7 @@ class _Generator:
             "        o = p + SURFACE_OFFSET * n;",
             "        d = reflect(d, n);",
             "    }",
-            "    return color;", "}", ""]
+            f"    return vec4(color, {self.d.to_real('path')});", "}", ""]
         return "\n".join(lines)
 
 

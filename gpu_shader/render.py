@@ -98,6 +98,7 @@ class Renderer:
                      steps=steps_id[..., 0].astype(np.int32),
                      object_id=np.where(hit, steps_id[..., 1], -1).astype(np.int32),
                      hit=hit, gamma=scene.render.gamma, max_steps=scene.render.max_steps,
+                     path=steps_id[..., 2].astype(np.uint32),
                      backend="gpu", precision="float32")
 
     def draw(self, vao, width, height, progress):

@@ -9,8 +9,14 @@ and judge each kind of pixel by what can legitimately differ there.
 - **interior**: pixels hit in both frames and more than ``erode`` pixels from any edge (a
   silhouette, or a boundary between two objects, where depth jumps), where depth, normal and
   colour must agree closely;
-- **display**: the 8-bit images as a person sees them, outside the excused coverage pixels;
-- **PSNR** of the colour over the whole image, as a trend.
+- **display**: the 8-bit images as a person sees them, outside the excused pixels;
+- **PSNR** and **SSIM** of the colour over the whole image, as trends.
+
+Colour and display also excuse pixels whose path labels differ (`Frame.path`: the two
+renderers saw a different surface, checker cell or hard-shadow state along the pixel's path,
+at a reflected checker edge or a shadow edge), as long as they lie within 1 px of a jump in
+the reference's label; like coverage pixels they are counted and limited, not hidden.
+`failures` applies the gates (`Gates`) and says in one line each what failed.
 """
 
 from __future__ import annotations
@@ -30,51 +36,135 @@ class Comparison:
     hit_differs_far: int         # ... of those, more than 1 pixel from a's silhouette
     object_id_differs: int       # pixels hit in both whose object ids differ
     interior: int                # pixels hit in both, eroded away from silhouettes
+    path_differs: int            # pixels hit in both whose path labels differ
+    path_differs_far: int        # ... of those, more than 1 px from a jump in a's path label
     depth_max: float             # max |t_a - t_b| over the interior
     depth_max_relative: float    # max |t_a - t_b| / t_a over the interior
+    depth_excess: float          # max |t_a - t_b| / max(2 epsilon, 1e-5 t_a): <= 1 passes
     normal_max_degrees: float    # max angle between the normals over the interior
-    color_max: float             # max |colour_a - colour_b| (any channel) over the interior
-    display_max: int             # max 8-bit difference outside the excused coverage pixels
+    color_max: float             # max |colour_a - colour_b| over the interior, off discontinuities
+    color_max_path_differs: float  # the same where the path labels differ (reported)
+    display_max: int             # max 8-bit difference outside all excused pixels
     psnr: float                  # of the linear colour over the whole image, in dB (inf: equal)
+    ssim: float                  # structural similarity of the colour (nan without scikit-image)
 
     def rows(self) -> list[tuple[str, str]]:
         """(name, value) pairs for printing as a table."""
         return [(f.name, _fmt(getattr(self, f.name))) for f in fields(self)]
 
 
+@dataclass(frozen=True)
+class Gates:
+    """The limits a backend must meet against the reference (issue 3's statistics 1-3)."""
+    coverage_fraction: float = 0.0005     # hit flags may differ on at most 0.05% of pixels
+    depth_excess: float = 1.0             # |dt| <= max(2 epsilon, 1e-5 t)
+    normal_degrees: float = 0.5
+    color: float = 1 / 255
+    display: int = 1
+
+
+def gates_against(reference_precision: str) -> Gates:
+    """The gates for a float32 candidate against a reference in ``reference_precision``.
+
+    Against the float64 reference the colour may differ by 2/255: the candidate's float32
+    rounding is then one more source of difference than against the float32 reference.
+    """
+    return Gates(color=(2 if reference_precision == "float64" else 1) / 255)
+
+
+def failures(c: Comparison, gates: Gates) -> list[str]:
+    """One line per gate that ``c`` fails; empty when it passes them all."""
+    out = []
+    if c.hit_differs_far:
+        out.append(f"coverage: {c.hit_differs_far} pixels differ in hit more than 1 px from "
+                   "the reference silhouette")
+    if c.hit_differs > gates.coverage_fraction * c.pixels:
+        out.append(f"coverage: {c.hit_differs} pixels differ in hit "
+                   f"(limit {gates.coverage_fraction:.2%} = {gates.coverage_fraction * c.pixels:.1f})")
+    if c.path_differs_far:
+        out.append(f"paths: {c.path_differs_far} pixels saw different surfaces, checker cells or "
+                   "shadows more than 1 px from a discontinuity of the reference")
+    if c.path_differs > gates.coverage_fraction * c.pixels:
+        out.append(f"paths: {c.path_differs} pixels saw different surfaces, checker cells or "
+                   f"shadows (limit {gates.coverage_fraction:.2%})")
+    if not c.depth_excess <= gates.depth_excess:
+        out.append(f"interior depth: |dt| reaches {c.depth_excess:.3g} x max(2 epsilon, 1e-5 t)")
+    if not c.normal_max_degrees <= gates.normal_degrees:
+        out.append(f"interior normal: {c.normal_max_degrees:.3g} deg > {gates.normal_degrees} deg")
+    if not c.color_max <= gates.color:
+        out.append(f"interior colour: {c.color_max:.4g} > {gates.color:.4g} "
+                   f"({c.color_max * 255:.2f}/255)")
+    if c.display_max > gates.display:
+        out.append(f"display: 8-bit images differ by {c.display_max} levels > {gates.display}")
+    return out
+
+
 def _fmt(value) -> str:
     return f"{value:.6g}" if isinstance(value, float) else str(value)
 
 
-def compare_frames(a: Frame, b: Frame, erode: int = 2) -> Comparison:
-    """Statistics of frame ``b`` against the reference frame ``a`` (same size and scene)."""
+def compare_frames(a: Frame, b: Frame, erode: int = 2, epsilon: float | None = None) -> Comparison:
+    """Statistics of frame ``b`` against the reference frame ``a`` (same size and scene).
+
+    ``epsilon`` is the scene's hit threshold, which scales the depth gate; without it
+    ``depth_excess`` is nan. Where both frames carry path labels, pixels whose labels differ
+    saw a different surface, checker cell or shadow state along their path (a reflected
+    checker edge, a shadow edge): like pixels whose hit flags differ, they are excused from
+    the colour and display statistics if they lie within 1 px of a jump in the reference's
+    label, and counted in ``path_differs``.
+    """
     if a.color.shape != b.color.shape:
         raise ValueError(f"frames differ in size: {a.color.shape[:2]} and {b.color.shape[:2]}")
     differs = a.hit != b.hit
     excused = differs & dilate(boundary(a.hit), 1)
     both = a.hit & b.hit
     interior = both & ~dilate(edges(a) | edges(b), erode)
+    if a.path is not None and b.path is not None:
+        path_differs = both & (a.path != b.path)
+        near_jump = dilate(boundary(a.path.astype(np.int64)), 1)
+    else:
+        path_differs = near_jump = np.zeros_like(both)
+    smooth = interior & ~path_differs
 
     ta, tb = a.depth[interior].astype(np.float64), b.depth[interior].astype(np.float64)
     na, nb = a.normal[interior].astype(np.float64), b.normal[interior].astype(np.float64)
     # atan2(|a x b|, a . b) is accurate for small angles, where arccos(a . b) is not.
     angle = np.arctan2(np.linalg.norm(np.cross(na, nb), axis=-1), np.sum(na * nb, axis=-1))
     ca, cb = a.color.astype(np.float64), b.color.astype(np.float64)
+    color_diff = np.abs(ca - cb).max(axis=-1)
     display = np.abs(a.image().astype(np.int16) - b.image().astype(np.int16)).max(axis=-1)
     mse = float(np.mean((ca - cb) ** 2))
+    depth_bound = (np.maximum(2 * epsilon, 1e-5 * np.abs(ta)) if epsilon is not None else None)
     return Comparison(
         pixels=a.hit.size,
         hit_differs=int(differs.sum()),
         hit_differs_far=int((differs & ~excused).sum()),
         object_id_differs=int((both & (a.object_id != b.object_id)).sum()),
         interior=int(interior.sum()),
+        path_differs=int(path_differs.sum()),
+        path_differs_far=int((path_differs & ~near_jump).sum()),
         depth_max=_max(np.abs(ta - tb)),
         depth_max_relative=_max(np.abs(ta - tb) / np.maximum(np.abs(ta), 1e-30)),
+        depth_excess=(_max(np.abs(ta - tb) / depth_bound) if depth_bound is not None
+                      else float("nan")),
         normal_max_degrees=_max(np.degrees(angle)),
-        color_max=_max(np.abs(ca[interior] - cb[interior])),
-        display_max=int(display[~excused].max(initial=0)),
+        color_max=_max(color_diff[smooth]),
+        color_max_path_differs=_max(color_diff[interior & path_differs]),
+        display_max=int(display[~excused & ~path_differs].max(initial=0)),
         psnr=float("inf") if mse == 0 else float(10 * np.log10(1 / mse)),
+        ssim=_ssim(ca, cb),
     )
+
+
+def _ssim(a: np.ndarray, b: np.ndarray) -> float:
+    """Structural similarity of two colour images in [0, 1] (nan if it cannot be computed)."""
+    try:
+        from skimage.metrics import structural_similarity
+    except ImportError:
+        return float("nan")
+    if min(a.shape[:2]) < 7:                    # smaller than its 7x7 window
+        return float("nan")
+    return float(structural_similarity(a, b, channel_axis=-1, data_range=1.0))
 
 
 def _max(values: np.ndarray) -> float:

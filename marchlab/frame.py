@@ -38,6 +38,12 @@ class Frame:
         The march limit, the top of the steps colour scale.
     backend, precision : str
         Which renderer made the frame, at which floating-point precision.
+    path : (H, W) uint32 ndarray or None
+        A label of what the pixel's path saw: the object ids, checker cells and hard-shadow
+        states along the primary ray and its mirror bounces. Where it changes between
+        neighbours the image is discontinuous (a reflected checker edge, a shadow edge), and
+        two correct renderers may disagree there. A 24-bit hash; None where a backend
+        does not compute it.
     """
     color: np.ndarray
     depth: np.ndarray
@@ -49,6 +55,7 @@ class Frame:
     max_steps: int = 256
     backend: str = ""
     precision: str = ""
+    path: np.ndarray | None = None
 
     @property
     def height(self) -> int:
@@ -89,7 +96,8 @@ class Frame:
             np.savez_compressed(buffer, color=self.color, depth=self.depth, normal=self.normal,
                                 steps=self.steps, object_id=self.object_id, hit=self.hit,
                                 gamma=self.gamma, max_steps=self.max_steps,
-                                backend=self.backend, precision=self.precision)
+                                backend=self.backend, precision=self.precision,
+                                **({} if self.path is None else {"path": self.path}))
         else:
             raise MarchlabError(f"{path}: unsupported output format {path.suffix!r} "
                                 "(use .png or .npz)")
@@ -101,7 +109,8 @@ class Frame:
         with np.load(path) as data:
             arrays = {k: data[k] for k in ("color", "depth", "normal", "steps", "object_id", "hit")}
             return cls(**arrays, gamma=float(data["gamma"]), max_steps=int(data["max_steps"]),
-                       backend=str(data["backend"]), precision=str(data["precision"]))
+                       backend=str(data["backend"]), precision=str(data["precision"]),
+                       path=data["path"] if "path" in data else None)
 
 
 def to_uint8(x: np.ndarray) -> np.ndarray:

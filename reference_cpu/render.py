@@ -47,6 +47,7 @@ def render(scene: Scene, width: int, height: int, precision: str = "float64",
         "color": np.zeros((n, 3), np.float32), "depth": np.full(n, np.inf, dtype),
         "normal": np.zeros((n, 3), dtype), "steps": np.zeros(n, np.int32),
         "object_id": np.full(n, -1, np.int32), "hit": np.zeros(n, bool),
+        "path": np.zeros(n, np.uint32),
     }
     block = max(1, BLOCK_RAYS // width) * width
     for start in range(0, n, block):
@@ -59,6 +60,17 @@ def render(scene: Scene, width: int, height: int, precision: str = "float64",
     arrays = {k: v.reshape(shape.get(k, (height, width))) for k, v in out.items()}
     return Frame(**arrays, gamma=scene.render.gamma, max_steps=scene.render.max_steps,
                  backend="numpy", precision=dtype.name)
+
+
+def path_step(path, ids, features=0):
+    """Fold one bounce (object ids, feature codes) into the path labels.
+
+    A hash in uint32 arithmetic kept to 24 bits, so that a float32 render target holds it
+    exactly; the GPU backend computes the same numbers (glsl/shading.glsl, ``path_step``).
+    """
+    ids = np.asarray(ids, np.int64) + 1
+    step = (path * np.uint32(1009) + ids.astype(np.uint32)) * np.uint32(64)
+    return (step + np.asarray(features, np.uint32)) & np.uint32(0xFFFFFF)
 
 
 class Tracer:
@@ -91,6 +103,7 @@ class Tracer:
         object_id = np.full(len(directions), -1, np.int32)
         normal[hit], object_id[hit] = self.hit_info(origin + t[hit, None] * directions[hit])
 
+        path = path_step(np.zeros(len(directions), np.uint32), object_id)
         if s.shading == "steps":
             color = shading.shade_steps(steps, s.max_steps)
         elif s.shading in AOV_MODES:
@@ -98,14 +111,21 @@ class Tracer:
             color[hit] = (shading.shade_normals(normal[hit]) if s.shading == "normals"
                           else shading.shade_depth(t[hit], s.max_distance))
         else:
-            color = self.lit_color(origin, directions, t, hit, normal, object_id)
+            color, path = self.lit_color(origin, directions, t, hit, normal, object_id)
         return {"color": np.clip(color, 0, 1), "depth": t, "normal": normal, "steps": steps,
-                "object_id": object_id, "hit": hit}
+                "object_id": object_id, "hit": hit, "path": path}
 
     def lit_color(self, origin, directions, t, hit, normal, object_id):
-        """Shaded colour with fog and mirror bounces (source 000's iterative reflection loop)."""
+        """Shaded colour with fog and mirror bounces (source 000's iterative reflection loop).
+
+        Also returns each pixel's path label (see `marchlab.frame.Frame.path`): at every
+        bounce it takes in the object id hit (-1 for the background), the checker cell's
+        parity and which lights are hard-shadowed, so that it changes exactly where the
+        colour may jump.
+        """
         s = self.settings
         color = np.zeros(directions.shape, dtype=self.dtype)
+        path = np.zeros(len(directions), dtype=np.uint32)
         weight = np.ones(len(directions), dtype=self.dtype)   # product of kr so far
         ray = np.arange(len(directions))                      # which pixel each ray serves
         o = np.broadcast_to(origin, directions.shape)
@@ -119,9 +139,11 @@ class Tracer:
             p = o[hit] + t[hit, None] * d[hit]
             miss = ~hit
             color[ray[miss]] += weight[miss, None] * shading.background(d[miss], s.background)
+            path[ray[miss]] = path_step(path[ray[miss]], -1)
 
             surface = self.surface(p, normal, -d[hit], ids)
-            shaded = self.shade(surface)
+            shaded, features = self.shade(surface)
+            path[ray[hit]] = path_step(path[ray[hit]], ids, features)
             if s.fog.density > 0:
                 shaded = shading.apply_fog(shaded, t[hit], np.asarray(s.fog.color, self.dtype),
                                            self.dtype.type(s.fog.density))
@@ -135,7 +157,7 @@ class Tracer:
             ray, weight = ray[hit][go], weight[go]
             o = p[go] + self.dtype.type(s.surface_offset) * normal[go]
             d = shading.reflect(d[hit][go], normal[go])
-        return color
+        return color, path
 
     def hit_info(self, p):
         """The normal (N, 3) and object id (N,) at hit points ``p`` (N, 3)."""
@@ -152,35 +174,59 @@ class Tracer:
                 p[checkered], self.checker_a[ids[checkered]], self.checker_b[ids[checkered]],
                 self.checker_scale[ids[checkered]])
         return shading.Surface(p, normal, view, albedo, self.ka[ids], self.kd[ids],
-                               self.ks[ids], self.shininess[ids])
+                               self.ks[ids], self.shininess[ids], ids)
 
     def shade(self, surface: shading.Surface):
-        """The shading model of the render settings, given the light reaching each point."""
+        """The shading model of the render settings, given the light reaching each point.
+
+        Returns the colour (N, 3) and a code (N,) of the discontinuous features seen at
+        each point: the checker parity, then one bit per light blocked by a hard shadow.
+        """
         s = self.settings
         ambient = np.asarray(s.ambient, dtype=self.dtype)
-        incoming = [self.light_arriving(light, surface) for light in self.scene.lights]
+        arriving = [self.light_arriving(light, surface) for light in self.scene.lights]
+        incoming = [(to_light, radiance) for to_light, radiance, _ in arriving]
+        features = self.checker_parity(surface)
+        for _, _, blocked in arriving:
+            features = 2 * features + blocked
         if s.shading == "phong":
-            return shading.shade_phong(surface, incoming, ambient)
+            return shading.shade_phong(surface, incoming, ambient), features
         if s.shading == "blinn_phong":
-            return shading.shade_blinn_phong(surface, incoming, ambient)
-        return shading.shade_toon(surface, incoming, ambient, s.toon_bands)
+            return shading.shade_blinn_phong(surface, incoming, ambient), features
+        return shading.shade_toon(surface, incoming, ambient, s.toon_bands), features
+
+    def checker_parity(self, surface: shading.Surface) -> np.ndarray:
+        """0 or 1 by checker cell where the material is checkered, else 0 (N,) uint32."""
+        parity = np.zeros(len(surface.position), dtype=np.uint32)
+        ids = surface.object_id
+        checkered = self.has_checker[ids]
+        if checkered.any():
+            scale = self.checker_scale[ids[checkered]]
+            p = surface.position[checkered]
+            parity[checkered] = (np.floor(p[:, 0] / scale) + np.floor(p[:, 2] / scale)) % 2
+        return parity
 
     def light_arriving(self, light, surface):
-        """``(L, radiance)`` of one light at every surface point, shadows included."""
+        """``(L, radiance, blocked)`` of one light at every surface point, shadows included.
+
+        ``blocked`` (N,) bool is True where a hard shadow ray hit something on its way.
+        Points facing away from the light (or that it does not reach) need no shadow ray:
+        their diffuse and specular terms are zero whatever the visibility, taken as 1.
+        """
         s = self.settings
         to_light, distance, radiance = light_at(light, surface.position)
         if s.shadows == "none":
-            return to_light, radiance
+            return to_light, radiance, np.zeros(len(to_light), dtype=bool)
         # Only points facing the light can receive any; skip the others' shadow rays.
         facing = (shading.dot(surface.normal, to_light) > 0) & (radiance.max(axis=1) > 0)
-        visible = np.zeros(len(to_light), dtype=self.dtype)
+        visible = np.ones(len(to_light), dtype=self.dtype)
         origins = surface.position[facing] + \
             self.dtype.type(s.surface_offset) * surface.normal[facing]
         args = (self.sdf, origins, to_light[facing], distance[facing], s.max_steps,
                 s.epsilon, s.max_distance)
         visible[facing] = (hard_shadow(*args) if s.shadows == "hard"
                            else soft_shadow(*args, self.dtype.type(s.penumbra_k)))
-        return to_light, radiance * visible[:, None]
+        return to_light, radiance * visible[:, None], (visible == 0) & (s.shadows == "hard")
 
 
 def check() -> None:

@@ -34,6 +34,7 @@ class Surface:
     kd: np.ndarray          # (N,)
     ks: np.ndarray          # (N,)
     shininess: np.ndarray   # (N,)
+    object_id: np.ndarray | None = None   # (N,) int, where known
 
 
 def reflect(d, n):

@@ -35,12 +35,26 @@ real toon_band(real x, real bands)
     return min((level + step) / (bands - 1.0), 1.0);
 }
 
+// 0 where floor(x/s) + floor(z/s) is even, 1 where it is odd.
+real checker_parity(vec3 p, real scale)
+{
+    real cells = floor(p.x / scale) + floor(p.z / scale);
+    return cells - 2.0 * floor(cells * 0.5);
+}
+
 // Checkerboard in the xz-plane: color_a where floor(x/s) + floor(z/s) is even.
 vec3 checker(vec3 p, vec3 color_a, vec3 color_b, real scale)
 {
-    real cells = floor(p.x / scale) + floor(p.z / scale);
-    real parity = cells - 2.0 * floor(cells * 0.5);
-    return parity == 0.0 ? color_a : color_b;
+    return checker_parity(p, scale) == 0.0 ? color_a : color_b;
+}
+
+// Fold one bounce into the pixel's path label (reference_cpu/render.py, path_step): a hash
+// of the object ids, checker cells and hard-shadow states along the path, kept to 24 bits
+// so that a float render target holds it exactly. Where it changes between neighbouring
+// pixels the image is discontinuous; the equivalence suite excuses only those pixels.
+uint path_step(uint path, int id, uint features)
+{
+    return ((path * 1009u + uint(id + 1)) * 64u + features) & 0xFFFFFFu;
 }
 
 // |N| as a colour: x red, y green, z blue.
