@@ -1,4 +1,5 @@
-"""The ``marchlab`` command: render scenes, list the bundled ones, print a scene file.
+"""The ``marchlab`` command: render scenes, list and print them, print a scene's generated
+shader, and compare two backends pixel by pixel.
 
 A user error (a bad file, field, size or option) ends with one line on stderr and exit code 2;
 anything else is a bug and keeps its traceback.
@@ -66,8 +67,9 @@ def build_parser() -> Parser:
                    help="image size in pixels (default: 640x480)")
     p.add_argument("--backend", choices=list(BACKENDS), default="numpy",
                    help="renderer (default: numpy, the reference)")
-    p.add_argument("--precision", choices=PRECISIONS, default="float64",
-                   help="floating-point precision of the arithmetic (default: float64)")
+    p.add_argument("--precision", choices=PRECISIONS, default=None,
+                   help="floating-point precision of the arithmetic (default: the backend's: "
+                        "float64 for numpy, float32 for gpu)")
     p.add_argument("--aov", choices=AOVS, default="color",
                    help="buffer written to a PNG (an .npz holds them all)")
     p.add_argument("--set", action="extend", nargs="+", default=[], metavar="FIELD=VALUE",
@@ -81,6 +83,31 @@ def build_parser() -> Parser:
     p.add_argument("scene", help="bundled scene name or a .toml path")
     p.add_argument("--set", action="extend", nargs="+", default=[], metavar="FIELD=VALUE")
     p.set_defaults(func=cmd_show)
+
+    p = sub.add_parser("shader", help="print the shader generated for a scene")
+    p.add_argument("scene", help="bundled scene name or a .toml path")
+    p.add_argument("--dialect", default="glsl", help="shading language (default: glsl)")
+    p.add_argument("--numbered", action="store_true",
+                   help="number the lines, as compiler messages do")
+    p.add_argument("--set", action="extend", nargs="+", default=[], metavar="FIELD=VALUE")
+    p.set_defaults(func=cmd_shader)
+
+    p = sub.add_parser("compare", help="render a scene with two backends and compare them "
+                                       "pixel by pixel (exit 1 if a gate fails)")
+    p.add_argument("scene", help="bundled scene name or a .toml path")
+    p.add_argument("--a", default="numpy", choices=list(BACKENDS),
+                   help="the reference backend (default: numpy)")
+    p.add_argument("--b", default="gpu", choices=list(BACKENDS),
+                   help="the backend checked against it (default: gpu)")
+    p.add_argument("--a-precision", choices=PRECISIONS, default=None,
+                   help="precision of a (default: float32 when b is float32, else a's own)")
+    p.add_argument("--b-precision", choices=PRECISIONS, default=None)
+    p.add_argument("--size", type=parse_size, default=(160, 120), metavar="WxH",
+                   help="image size in pixels (default: 160x120)")
+    p.add_argument("--save", metavar="DIR",
+                   help="also write both images, an amplified difference and the error mask")
+    p.add_argument("--set", action="extend", nargs="+", default=[], metavar="FIELD=VALUE")
+    p.set_defaults(func=cmd_compare)
     return parser
 
 
@@ -113,7 +140,7 @@ def cmd_render(args) -> int:
         frame.save(output, aov=args.aov)
     except OSError as err:
         raise MarchlabError(f"{output}: cannot write: {err.strerror}") from None
-    print(f"wrote {output} ({width}x{height}, {args.backend} {args.precision}, "
+    print(f"wrote {output} ({width}x{height}, {args.backend} {frame.precision}, "
           f"{seconds:.2f} s)")
     return 0
 
@@ -141,6 +168,44 @@ def cmd_scenes(args) -> int:
 def cmd_show(args) -> int:
     print(scene_to_toml(load_scene(args.scene, args.set)), end="")
     return 0
+
+
+def cmd_shader(args) -> int:
+    scene = load_scene(args.scene, args.set)
+    from gpu_shader.generate import generate     # no OpenGL needed to generate
+    source = generate(scene, 640, 480, dialect=args.dialect).source
+    if args.numbered:
+        lines = source.splitlines()
+        width = len(str(len(lines)))
+        source = "".join(f"{i:>{width}}  {line}\n" for i, line in enumerate(lines, 1))
+    print(source, end="")
+    return 0
+
+
+def cmd_compare(args) -> int:
+    from .compare import compare_frames, failures, gates_against, write_difference_images
+    scene = load_scene(args.scene, args.set)
+    width, height = args.size
+    b_precision = args.b_precision or BACKENDS[args.b].precisions[0]
+    a_precision = args.a_precision or (
+        b_precision if b_precision in BACKENDS[args.a].precisions else None)
+    a = render(scene, width, height, backend=args.a, precision=a_precision)
+    b = render(scene, width, height, backend=args.b, precision=b_precision)
+    c = compare_frames(a, b, epsilon=scene.render.epsilon)
+    failed = failures(c, gates_against(a.precision))
+    print(f"{args.scene}: {args.b} {b.precision} against {args.a} {a.precision}, "
+          f"{width}x{height}")
+    rows = c.rows()
+    name_width = max(len(name) for name, _ in rows)
+    for name, value in rows:
+        print(f"  {name:<{name_width}}  {value}")
+    if args.save:
+        for path in write_difference_images(a, b, c, Path(args.save)):
+            print(f"wrote {path}")
+    for line in failed:
+        print(f"FAIL {line}")
+    print("PASS" if not failed else f"FAIL ({len(failed)} gates)")
+    return 1 if failed else 0
 
 
 if __name__ == "__main__":

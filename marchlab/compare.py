@@ -21,10 +21,13 @@ the reference's label; like coverage pixels they are counted and limited, not hi
 
 from __future__ import annotations
 
+import io
 from dataclasses import dataclass, fields
+from pathlib import Path
 
 import numpy as np
 
+from .files import write_atomically
 from .frame import Frame
 
 
@@ -196,3 +199,35 @@ def dilate(mask: np.ndarray, radius: int) -> np.ndarray:
         for dx in range(2 * radius + 1):
             out |= padded[dy:dy + h, dx:dx + w]
     return out
+
+
+def error_mask(a: Frame, b: Frame) -> np.ndarray:
+    """Pixels (H, W) where ``b`` is off by more than the float32 gates, outside excused ones."""
+    gates = Gates()
+    differs = a.hit != b.hit
+    excused = differs & dilate(boundary(a.hit), 1)
+    color = np.abs(a.color.astype(np.float64) - b.color).max(axis=-1) > gates.color
+    if a.path is not None and b.path is not None:
+        excused |= a.hit & b.hit & (a.path != b.path)
+    return (differs | color) & ~excused
+
+
+def write_difference_images(a: Frame, b: Frame, c: Comparison, directory) -> list:
+    """Write a.png, b.png, the difference amplified x16 and the error mask; return the paths."""
+    from PIL import Image                      # only when images are asked for
+    directory = Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    diff = np.clip(np.abs(a.color.astype(np.float64) - b.color) * 16, 0, 1)
+    images = {
+        f"a-{a.backend}-{a.precision}.png": a.image(),
+        f"b-{b.backend}-{b.precision}.png": b.image(),
+        "difference-x16.png": np.floor(diff * 255 + 0.5).astype(np.uint8),
+        "error-mask.png": np.repeat(error_mask(a, b)[..., None] * np.uint8(255), 3, axis=-1),
+    }
+    paths = []
+    for name, pixels in images.items():
+        buffer = io.BytesIO()
+        Image.fromarray(pixels).save(buffer, format="PNG")
+        write_atomically(directory / name, buffer.getvalue())
+        paths.append(directory / name)
+    return paths
