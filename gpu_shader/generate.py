@@ -322,7 +322,8 @@ class _Generator:
                 "// (reference_cpu/render.py, Tracer.trace).",
                 "vec4 pixel_color(vec3 origin, vec3 direction, Hit h, vec3 n, int id)", "{"]
         path = f"{self.d.to_real('path_step(0u, id, 0u)')}"
-        if mode == "steps":
+        if mode == "steps":                  # the colour jumps with every step: label them
+            path = f"{self.d.to_real('path_step(uint(h.steps), id, 0u)')}"
             color = f"heat({self.d.to_real('h.steps')} / {self.d.to_real('MAX_STEPS')})"
         elif mode == "normals":
             color = "h.hit == 1 ? shade_normals(n) : background(direction)"

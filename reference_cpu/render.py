@@ -103,7 +103,10 @@ class Tracer:
         object_id = np.full(len(directions), -1, np.int32)
         normal[hit], object_id[hit] = self.hit_info(origin + t[hit, None] * directions[hit])
 
-        path = path_step(np.zeros(len(directions), np.uint32), object_id)
+        # The path label (Frame.path) of the AOV modes: the object hit, and for the steps
+        # mode the step count too, as its colour jumps with every step.
+        counted = steps if s.shading == "steps" else np.zeros_like(steps)
+        path = path_step(counted.astype(np.uint32), object_id)
         if s.shading == "steps":
             color = shading.shade_steps(steps, s.max_steps)
         elif s.shading in AOV_MODES:

@@ -1,0 +1,60 @@
+"""Fixtures of the equivalence suite, in the style of mitsuba3's conftest.py.
+
+``backend`` runs a test body once for every candidate backend marchlab knows (every backend
+but the NumPy reference). A backend this machine cannot run is skipped with the reason the
+backend itself gives (say, no OpenGL context), never passed silently.
+
+References are rendered once per (scene, size, precision) and shared by every test and
+backend that needs them. At the end of the run a table of PSNR and SSIM per case is printed:
+they are trends to watch, not gates.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import pytest
+
+from marchlab import render
+from marchlab.render import BACKENDS, backend_problem
+from marchlab.scenefile import scene_to_toml
+
+CANDIDATES = [name for name in BACKENDS if name != "numpy"]
+
+TRENDS: list[tuple[str, str, str, float, float]] = []   # case, backend, reference, psnr, ssim
+
+
+@pytest.fixture(params=CANDIDATES)
+def backend(request) -> str:
+    """The name of a backend that can run here; skipped, with its reason, if it cannot."""
+    problem = _problem(request.param)
+    if problem:
+        pytest.skip(f"{request.param} backend unavailable: {problem}")
+    return request.param
+
+
+@functools.cache
+def _problem(name: str) -> str | None:
+    return backend_problem(name)
+
+
+_REFERENCES: dict[tuple, object] = {}
+
+
+def reference_frame(scene, width: int, height: int, precision: str):
+    """The NumPy reference frame of ``scene``, rendered once per run (keyed by its TOML)."""
+    key = (scene_to_toml(scene), width, height, precision)
+    if key not in _REFERENCES:
+        _REFERENCES[key] = render(scene, width, height, backend="numpy", precision=precision)
+    return _REFERENCES[key]
+
+
+def pytest_terminal_summary(terminalreporter):
+    if not TRENDS:
+        return
+    write = terminalreporter.write_line
+    terminalreporter.section("equivalence trends (PSNR dB, SSIM; not gated)")
+    width = max(len(case) for case, *_ in TRENDS)
+    for case, backend, reference, psnr, ssim in sorted(TRENDS):
+        write(f"{case:<{width}}  {backend:>6} vs numpy {reference}  "
+              f"PSNR {psnr:7.2f}  SSIM {ssim:.5f}")
