@@ -2,10 +2,12 @@
 
     python benchmarks/bench_render.py [--scene classroom] [--size 640x480] [--repeat 5]
 
-Prints a Markdown table (for docs/performance.md): median and best wall time per frame, CPU
-time, the ratio to the NumPy float64 reference, and mean steps per pixel; once for the scene as
-it is and once for primary rays alone (no shadows, reflections or lighting). Machines are shared
-and noisy, so compare ratios from the same run, not absolute times across runs.
+Prints a Markdown table (for docs/performance.md): median and best wall time per frame (for
+the gpu backend: draw and read-back of every buffer), CPU time, the speed-up over the NumPy
+reference at float64 and at float32, frames per second and mean steps per pixel; once for the
+scene as it is and once for primary rays alone (no shadows, reflections or lighting), and the
+device each backend ran on. Machines are shared and noisy, so compare ratios from the same
+run, not absolute times across runs.
 """
 
 from __future__ import annotations
@@ -22,7 +24,7 @@ import numpy as np
 
 import marchlab
 from marchlab.cli import parse_size
-from marchlab.render import PRECISIONS
+from marchlab.render import BACKENDS, backend_problem
 
 
 def primary_rays_only(scene):
@@ -66,23 +68,43 @@ def main(argv=None) -> int:
     width, height = args.size
     scene = marchlab.load_scene(args.scene)
 
+    backends = []
+    for backend in args.backend or list(BACKENDS):
+        problem = backend_problem(backend)
+        if problem:
+            print(f"- {backend}: skipped ({problem})")
+        else:
+            backends.append(backend)
     print(f"Scene `{args.scene}` at {width}x{height}, {args.repeat} timed renders after one "
           f"warm-up; {cpu_name()}, {os.cpu_count()} cores; Python "
-          f"{platform.python_version()}, NumPy {np.__version__}.\n")
-    print("| workload | backend | precision | median ms | best ms | CPU ms | vs numpy float64 "
-          "| mean steps/px |")
-    print("| --- | --- | --- | ---: | ---: | ---: | ---: | ---: |")
+          f"{platform.python_version()}, NumPy {np.__version__}.")
+    for backend in backends:
+        print(f"- {backend}: {device(backend)}")
+    print("\n| workload | backend | precision | median ms | best ms | CPU ms | vs numpy float64 "
+          "| vs numpy float32 | frames/s | mean steps/px |")
+    print("| --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
     for label, variant in (("full scene", scene), ("primary rays", primary_rays_only(scene))):
-        reference = None
-        for backend in args.backend or list(marchlab.BACKENDS):
-            for precision in reversed(PRECISIONS):
+        numpy_times = {}
+        for backend in backends:
+            for precision in sorted(BACKENDS[backend].precisions, reverse=True):
                 median, best, cpu, frame = time_render(variant, width, height, backend,
                                                        precision, args.repeat)
-                reference = reference or median
-                print(f"| {label} | {backend} | {precision} | {median * 1e3:.0f} | "
-                      f"{best * 1e3:.0f} | {cpu * 1e3:.0f} | {reference / median:.2f}x | "
-                      f"{frame.steps.mean():.1f} |", flush=True)
+                if backend == "numpy":
+                    numpy_times[precision] = median
+                ratios = [f"{numpy_times[p] / median:.1f}x" if p in numpy_times else "-"
+                          for p in ("float64", "float32")]
+                print(f"| {label} | {backend} | {precision} | {median * 1e3:.1f} | "
+                      f"{best * 1e3:.1f} | {cpu * 1e3:.0f} | {ratios[0]} | {ratios[1]} | "
+                      f"{1 / median:.1f} | {frame.steps.mean():.1f} |", flush=True)
     return 0
+
+
+def device(backend: str) -> str:
+    """What a backend runs on: the CPU, or the OpenGL renderer."""
+    if backend == "gpu":
+        from gpu_shader.render import device_name
+        return f"OpenGL renderer {device_name()}"
+    return cpu_name()
 
 
 if __name__ == "__main__":
