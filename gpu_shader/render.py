@@ -76,8 +76,12 @@ class Renderer:
             raise MarchlabError(
                 f"the scene needs {parameters.nbytes} bytes of shader parameters; this OpenGL "
                 f"allows {self.max_block} in a uniform block (fewer objects or lights)")
-        program, vao = self.program(generated.source)
-        fbo = self.target(width, height)
+        with self.ctx:           # make our context current: the process may hold others
+            program, vao = self._program(generated.source)
+            fbo = self.target(width, height)
+            return self._draw(scene, program, vao, fbo, parameters, width, height, progress)
+
+    def _draw(self, scene, program, vao, fbo, parameters, width, height, progress) -> Frame:
         buffer = self.ctx.buffer(parameters.tobytes())
         try:
             buffer.bind_to_uniform_block(0)
@@ -116,6 +120,10 @@ class Renderer:
 
     def program(self, source: str):
         """The compiled program for ``source``, from the cache when it was seen before."""
+        with self.ctx:           # a `with` does not nest: exiting restores the previous one
+            return self._program(source)
+
+    def _program(self, source: str):
         if source in self.programs:
             self.programs.move_to_end(source)
             return self.programs[source]

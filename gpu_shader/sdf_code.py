@@ -138,7 +138,8 @@ class SdfWriter:
             rows, args = primitive_parameters(node)
             first = self.allocate(rows)
             d = self.name("d")
-            self.lines.append(f"// object {object_id}: {node.kind}, material {node.material!r}")
+            # (No material name here: which material an object wears is a parameter.)
+            self.lines.append(f"// object {object_id}: {node.kind}")
             self.lines.append(f"real {d} = {self.call(PRIMITIVES[type(node)], [p] + args, first)};")
             return d, str(object_id)
         if type(node) in TRANSFORMS:
