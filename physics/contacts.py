@@ -1,0 +1,148 @@
+"""Contacts: where two spheres, or a sphere and a plane, touch or overlap.
+
+A contact joins body ``a`` (always a sphere) to body ``b`` (a sphere, or the static world for a
+plane). Its normal points from b to a, the direction in which a is pushed, and its gap is the
+distance between the surfaces, negative when they overlap:
+
+    sphere-sphere   gap = |x_a - x_b| - (r_a + r_b),   n = (x_a - x_b) / |x_a - x_b|
+    sphere-plane    gap = n_p . x_a - offset - r_a,     n = n_p            (plane n_p . x = offset)
+
+(Ericson, Real-Time Collision Detection, 2005, ch. 4.3 and 5.2 give the same tests.) Two centres
+that coincide have no direction between them; they get a fixed fallback normal, +y, so the
+answer is deterministic and never NaN.
+
+The static world is stored as one extra body after the last sphere, index N, with zero inverse
+mass: the solvers then treat plane contacts and sphere contacts with the same formulas.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from marchlab.geometry import dot
+from physics.broadphase import find_pairs
+
+FALLBACK_NORMAL = (0.0, 1.0, 0.0)
+
+
+@dataclass
+class Contacts:
+    """K contacts, in the fixed order the sequential solver visits them.
+
+    Attributes
+    ----------
+    a, b : (K,) int64
+        The bodies; b is N (the static world) for a plane contact.
+    plane : (K,) int64
+        The plane's index for a sphere-plane contact, -1 for a sphere-sphere one.
+    normal : (K, 3)
+        Unit normal from b toward a.
+    gap : (K,)
+        Surface separation (m), negative when the bodies overlap.
+    radius_a, radius_b : (K,)
+        Lever arms (m) from each centre to the contact point; 0 for the static world.
+    restitution, friction : (K,)
+        The pair's coefficients: max(e_a, e_b) and sqrt(mu_a mu_b), as Box2D mixes them
+        (box2d v3 src/contact.c, b2MixRestitution and b2MixFriction).
+    """
+    a: np.ndarray
+    b: np.ndarray
+    plane: np.ndarray
+    normal: np.ndarray
+    gap: np.ndarray
+    radius_a: np.ndarray
+    radius_b: np.ndarray
+    restitution: np.ndarray
+    friction: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.a)
+
+    def select(self, keep: np.ndarray) -> "Contacts":
+        """The contacts where ``keep`` (K,) is True, in the same order."""
+        return Contacts(**{name: value[keep] for name, value in vars(self).items()})
+
+    def kind(self) -> np.ndarray:
+        """``"sphere-plane"`` or ``"sphere-sphere"`` for each contact, (K,) str."""
+        return np.where(self.plane >= 0, "sphere-plane", "sphere-sphere")
+
+
+def sphere_plane_gaps(position, radius, plane_normal, plane_offset) -> np.ndarray:
+    """Gap (N, P) between N spheres and P planes: n_p . x - offset - r (m)."""
+    return dot(position[:, None, :], plane_normal[None, :, :]) - plane_offset - radius[:, None]
+
+
+def sphere_sphere_normals(position, a, b):
+    """Unit normals (K, 3) from b toward a, and centre distances (K,), for sphere pairs.
+
+    Where the centres coincide (distance 0) the normal is FALLBACK_NORMAL.
+    """
+    d = position[a] - position[b]
+    distance = np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1] + d[:, 2] * d[:, 2])
+    coincident = distance == 0
+    safe = np.where(coincident, 1, distance)
+    normal = np.where(coincident[:, None], np.asarray(FALLBACK_NORMAL, position.dtype),
+                      d / safe[:, None])
+    return normal, distance
+
+
+def spread_coincident(existing, new, distance, rng) -> np.ndarray:
+    """Move each of the ``new`` centres (M, 3) that equals an earlier centre (of ``existing``
+    (N, 3) or of ``new``) by ``distance`` (M,) in a direction drawn from ``rng``; returns them.
+
+    Source 000 moves a sphere spawned on another this way, unseeded; with a seeded generator
+    the pair separates the same way on every run.
+    """
+    new = new.copy()
+    while True:
+        everything = np.concatenate([existing, new])
+        _, first = np.unique(everything, axis=0, return_index=True)
+        repeated = np.ones(len(everything), bool)
+        repeated[first] = False
+        moved = np.flatnonzero(repeated[len(existing):])
+        if len(moved) == 0:
+            return new
+        for row in moved:
+            direction = rng.normal(size=3)
+            new[row] = new[row] + distance[row] * direction / np.sqrt(direction @ direction)
+
+
+def find_contacts(world, reach: float) -> Contacts:
+    """Every contact with gap <= ``reach`` (m) among the active spheres of ``world``.
+
+    Plane contacts come first, ordered by (sphere, plane), then sphere pairs ordered by (a, b)
+    with a < b. The order depends only on the state, never on how the pairs were found.
+    """
+    n = world.count
+    dtype = world.dtype
+    alive = np.flatnonzero(world.active)
+    x, r = world.position, world.radius
+
+    gaps = sphere_plane_gaps(x[alive], r[alive], world.plane_normal, world.plane_offset)
+    body, plane = np.nonzero(gaps <= reach)             # row-major: sorted by (sphere, plane)
+    plane_a = alive[body]
+
+    i, j = find_pairs(x[alive], r[alive] + 0.5 * reach)
+    a, b = alive[i], alive[j]
+    normal, distance = sphere_sphere_normals(x, a, b)
+    gap = distance - (r[a] + r[b])
+    near = gap <= reach
+    a, b, normal, gap = a[near], b[near], normal[near], gap[near]
+
+    return Contacts(
+        a=np.concatenate([plane_a, a]),
+        b=np.concatenate([np.full(len(plane_a), n, np.int64), b]),
+        plane=np.concatenate([plane, np.full(len(a), -1)]).astype(np.int64),
+        normal=np.concatenate([world.plane_normal[plane], normal]).astype(dtype, copy=False),
+        gap=np.concatenate([gaps[body, plane], gap]).astype(dtype, copy=False),
+        radius_a=np.concatenate([r[plane_a], r[a]]),
+        radius_b=np.concatenate([np.zeros(len(plane_a), dtype), r[b]]),
+        restitution=np.concatenate([
+            np.maximum(world.restitution[plane_a], world.plane_restitution[plane]),
+            np.maximum(world.restitution[a], world.restitution[b])]),
+        friction=np.concatenate([
+            np.sqrt(world.friction[plane_a] * world.plane_friction[plane]),
+            np.sqrt(world.friction[a] * world.friction[b])]),
+    )

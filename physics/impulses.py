@@ -1,0 +1,162 @@
+"""The impulse one contact needs, for solid spheres; shared by both solvers and by the
+continuous collision test.
+
+A contact joins sphere a (radius r_a) to b (radius r_b, or the static world) with the unit
+normal n from b to a. The contact point is -r_a n from a's centre and +r_b n from b's, so the
+velocity of a's surface point relative to b's is
+
+    v_rel = (v_a + w_a x (-r_a n)) - (v_b + w_b x (r_b n)) = v_a - v_b - (r_a w_a + r_b w_b) x n.
+
+An impulse P on a (and -P on b) changes
+
+    v_a += P / m_a,   v_b -= P / m_b,   w_a += -r_a (n x P) / I_a,   w_b += -r_b (n x P) / I_b,
+
+with I = 2/5 m r^2 for a solid sphere. Along n the spin terms vanish (n x n = 0), so a normal
+impulse j changes the normal relative velocity by j k_n, k_n = 1/m_a + 1/m_b; along a tangent t
+it changes the tangential one by |J| k_t with k_t = 1/m_a + 1/m_b + r_a^2/I_a + r_b^2/I_b (for a
+lone sphere on the ground, k_t = 7 / (2m): the 7 of the sliding-to-rolling answer 5/7 v0).
+
+Friction is Coulomb's law applied to impulses (Mirtich, "Impulse-based dynamic simulation of
+rigid body systems", PhD thesis, 1996, ch. 4): the tangential impulse that would stop the
+sliding, -v_t / k_t, cut down to length mu j if it is longer (the ball then keeps sliding).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from marchlab.geometry import dot
+
+
+@dataclass
+class SolverBodies:
+    """Velocities and inverse masses of N spheres plus the static world as row N.
+
+    velocity, spin : (N + 1, 3) m/s and rad/s; row N stays zero.
+    inverse_mass : (N + 1,) 1/kg, inverse_inertia : (N + 1,) 1/(kg m^2); 0 in row N.
+    """
+    velocity: np.ndarray
+    spin: np.ndarray
+    inverse_mass: np.ndarray
+    inverse_inertia: np.ndarray
+
+
+def cross(p: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """Row-wise cross product p x q of (K, 3) arrays, written out (np.cross is slower here)."""
+    return np.stack([p[:, 1] * q[:, 2] - p[:, 2] * q[:, 1],
+                     p[:, 2] * q[:, 0] - p[:, 0] * q[:, 2],
+                     p[:, 0] * q[:, 1] - p[:, 1] * q[:, 0]], axis=1)
+
+
+def relative_velocity(bodies: SolverBodies, a, b, normal, radius_a, radius_b) -> np.ndarray:
+    """v_rel (K, 3) of a's contact point relative to b's (m/s)."""
+    lever = radius_a[:, None] * bodies.spin[a] + radius_b[:, None] * bodies.spin[b]
+    return bodies.velocity[a] - bodies.velocity[b] - cross(lever, normal)
+
+
+def effective_masses(inverse_mass_a, inverse_mass_b, inverse_inertia_a, inverse_inertia_b,
+                     radius_a, radius_b):
+    """k_n and k_t (K,) in 1/kg: change of relative velocity per unit impulse, along n and t."""
+    k_normal = inverse_mass_a + inverse_mass_b
+    k_tangent = (k_normal + radius_a * radius_a * inverse_inertia_a
+                 + radius_b * radius_b * inverse_inertia_b)
+    return k_normal, k_tangent
+
+
+def friction_impulse(v_tangent: np.ndarray, k_tangent, limit) -> np.ndarray:
+    """Coulomb friction: -v_t / k_t (K, 3), shortened to length ``limit`` (K,) where longer."""
+    sticking = -v_tangent / k_tangent[:, None]
+    length = np.sqrt(dot(sticking, sticking))
+    scale = np.where(length > limit, limit / np.where(length > 0, length, 1), 1)
+    return sticking * scale[:, None]
+
+
+def collision_impulse(v_rel, normal, gravity_part, restitution, friction, k_normal, k_tangent,
+                      threshold):
+    """The impulse of one collision, from the current relative velocity.
+
+    Parameters
+    ----------
+    v_rel : (K, 3)
+        Relative contact velocity now, this step's gravity included (m/s).
+    normal : (K, 3)
+        Unit normals from b to a.
+    gravity_part : (K,)
+        What this step's gravity added to n . v_rel: h n.g for a plane contact, 0 between two
+        falling spheres (m/s). The bounce is computed from the approach speed without it, so
+        the velocity gravity adds while a ball rests on the floor (g h each step) never turns
+        into a bounce, and at e = 1 a bounce returns exactly the speed the ball arrived with.
+    restitution, friction : (K,)
+    k_normal, k_tangent : (K,)
+        Effective inverse masses (1/kg), see module docstring.
+    threshold : float
+        Approach speeds below this (m/s) do not bounce: the restitution threshold that lets
+        resting contact rest.
+
+    Returns
+    -------
+    impulse : (K, 3)
+        P on body a (N s); zero for contacts that are not approaching.
+    normal_impulse : (K,)
+        Its normal part j (N s).
+    approach : (K,)
+        Approach speed -n.v_rel before this step's gravity (m/s); positive means approaching.
+    """
+    u = dot(v_rel, normal)
+    approach = gravity_part - u
+    colliding = approach > threshold
+    # The normal velocity afterwards is e times the approach speed, leaving: solve for j.
+    j = np.where(colliding, (restitution * approach - u) / k_normal, 0)
+    j = np.maximum(j, 0)
+    v_tangent = v_rel - u[:, None] * normal
+    tangent = friction_impulse(v_tangent, k_tangent, friction * j)
+    tangent *= colliding[:, None]
+    return j[:, None] * normal + tangent, j, approach
+
+
+def apply_impulse(bodies: SolverBodies, a, b, normal, radius_a, radius_b, impulse) -> None:
+    """Add P to body a and -P to b (rows of ``bodies``, in place; sums repeated bodies)."""
+    turn = cross(normal, impulse)
+    im, ii = bodies.inverse_mass, bodies.inverse_inertia
+    np.add.at(bodies.velocity, a, impulse * im[a][:, None])
+    np.add.at(bodies.velocity, b, -impulse * im[b][:, None])
+    np.add.at(bodies.spin, a, -(radius_a * ii[a])[:, None] * turn)
+    np.add.at(bodies.spin, b, -(radius_b * ii[b])[:, None] * turn)
+
+
+def contact_impulse(v_rel, normal, target, friction, k_normal, k_tangent, normal_total,
+                    tangent_total):
+    """One solver pass over resting contacts: the change of their accumulated impulses.
+
+    The accumulated normal impulse may only push (>= 0), and the accumulated friction impulse
+    stays within mu times it (Catto, "Iterative dynamics with temporal coherence", GDC 2005:
+    clamp the sum, not each increment, so later passes can take back what earlier ones overdid).
+
+    Parameters
+    ----------
+    v_rel, normal : (K, 3)
+        Relative contact velocity now (m/s) and unit normals.
+    target : (K,)
+        Lowest allowed normal velocity (m/s): 0, or -gap/h to let a small gap close this step.
+    friction, k_normal, k_tangent : (K,)
+    normal_total : (K,), tangent_total : (K, 3)
+        Impulses accumulated so far this step (N s); updated in place.
+
+    Returns
+    -------
+    (K, 3) ndarray
+        The impulse to apply now to body a (N s).
+    """
+    u = dot(v_rel, normal)
+    new_normal = np.maximum(normal_total + (target - u) / k_normal, 0)
+    v_tangent = v_rel - u[:, None] * normal
+    # The accumulated friction that would stop the sliding, tangent_total - v_t / k_t, clamped
+    # to the friction cone |J| <= mu j.
+    new_tangent = friction_impulse(v_tangent - tangent_total * k_tangent[:, None],
+                                   k_tangent, friction * new_normal)
+    impulse = (new_normal - normal_total)[:, None] * normal + (new_tangent - tangent_total)
+    normal_total[:] = new_normal
+    tangent_total[:] = new_tangent
+    return impulse

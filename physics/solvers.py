@@ -1,0 +1,296 @@
+"""Contact solvers: the impulses that stop spheres passing into each other and the floor.
+
+Resolving contacts has two stages (after Guendelman, Bridson and Fedkiw, "Nonconvex rigid
+bodies with stacking", SIGGRAPH 2003, which separates collision from contact):
+
+1. collisions: every contact whose bodies approach faster than the restitution threshold gets
+   the impulse of a collision with restitution e and Coulomb friction; repeated until nothing
+   approaches (at most ``iterations`` sweeps);
+2. resting contact: impulses that only stop interpenetration (e = 0) and apply friction,
+   accumulated and clamped over ``iterations`` passes (Catto's sequential impulses, GDC 2005).
+
+The two solvers differ only in which velocities a contact sees:
+
+sequential (Gauss-Seidel)
+    Contacts are visited one at a time in a fixed order (planes first, then pairs by index),
+    each seeing the velocities left by the one before. A collision travels down a row of
+    touching balls within one step, as the impact does in a real Newton's cradle.
+
+simultaneous (Jacobi)
+    Every contact computes its impulse from the same velocities and the impulses are summed:
+    what a GPU does, one thread per contact. Summing two impulses meant for one body would
+    overshoot (and could add energy), so each body's mass is shared among its contacts
+    (Tonge, Benevolenski and Voroshilov, "Mass splitting for jitter-free parallel rigid body
+    simulation", SIGGRAPH 2012): as if each contact pushed its own copy of the body and the
+    copies' velocities were then averaged. Kinetic energy is convex in the velocities, so the
+    average has no more energy than the copies had: no sweep can add energy. In a collision
+    sweep the mass is shared only among the contacts that collide in that sweep.
+
+Newton's cradle (5 touching balls, e = 1, the first struck at speed V). The sequential solver
+meets contact 1-2 first and swaps the velocities of balls 1 and 2, then 2-3 and swaps again,
+and so on: ball 5 leaves at V and balls 1-4 stand still, with momentum and energy conserved,
+as on the desk. The simultaneous solver gets the same answer, one contact per sweep: in each
+sweep only one contact of the row is closing, so no mass is shared and each collision is a
+plain two-ball swap. (Had the mass been shared among all touching contacts, balls 2-4, each
+touched twice, would weigh half as much to each contact and the row would end moving together
+at V/5, keeping momentum but losing 80% of the energy.)
+
+Where they differ is a true simultaneous impact, one ball striking two at once: a ball falling
+onto two touching balls, exactly between them. The sequential solver collides with the
+lower-numbered ball first, as if the other were not there, then with the other: energy is
+conserved but the answer is lopsided and depends on the numbering. The simultaneous solver
+treats both at once and stays symmetric, but the averaging loses energy (a third of it at
+e = 1 in tests/physics/test_collisions.py). Neither is wrong: simultaneous impact has no single
+right answer (Smith et al., "Reflections on simultaneous impact", SIGGRAPH 2012); a real
+cradle behaves sequentially because the impact runs through the balls as a wave.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from marchlab.geometry import dot
+
+from physics.impulses import (SolverBodies, apply_impulse, collision_impulse, contact_impulse,
+                              effective_masses, relative_velocity)
+
+SETTLED = 1e-9   # m/s: resting passes stop once none changes a velocity by more than this
+
+
+def solve_sequential(bodies: SolverBodies, contacts, gravity_part, h, threshold, iterations,
+                     warm):
+    """Gauss-Seidel: contacts one by one in their fixed order. Updates ``bodies`` in place.
+
+    Parameters
+    ----------
+    bodies : SolverBodies
+        Velocities after this step's gravity, and inverse masses (row N: the static world).
+    contacts : Contacts
+    gravity_part : (K,) ndarray
+        h n.g for plane contacts, 0 between spheres (m/s); see impulses.collision_impulse.
+    h : float
+        Time step (s).
+    threshold : float
+        Restitution threshold (m/s).
+    iterations : int
+        Most collision sweeps, and resting-contact passes.
+    warm : (K,) and (K, 3) ndarrays
+        Resting impulses to start from (N s): last step's, for the contacts that persist
+        (`warm_start`). Updated in place to this step's.
+
+    Returns
+    -------
+    list of (contact indices, approach speeds, normal impulses)
+        The collisions, in the order they happened.
+
+    Contacts that share no body do not affect each other, so the fixed order is run in
+    ``levels``: a contact goes in the first level after every earlier contact it shares a body
+    with. All contacts of a level are computed at once, with exactly the result of visiting
+    them one by one.
+    """
+    k_normal, k_tangent = _masses(bodies, contacts, 1)
+    levels = sequential_levels(contacts.a, contacts.b, len(bodies.velocity) - 1)
+    collisions = []
+    for _ in range(iterations):
+        collided = False
+        for level in levels:
+            hit = _collide(bodies, contacts, level, gravity_part, k_normal, k_tangent, threshold)
+            if hit is not None:
+                collisions.append(hit)
+                collided = True
+        if not collided:
+            break
+
+    normal_total, tangent_total = warm
+    _apply_warm_start(bodies, contacts, normal_total, tangent_total)
+    target = _resting_target(contacts, h)
+    for _ in range(iterations):
+        change = max((_rest(bodies, contacts, level, target, k_normal, k_tangent, normal_total,
+                            tangent_total) for level in levels), default=0)
+        if change < SETTLED:
+            break
+    return collisions
+
+
+def solve_simultaneous(bodies: SolverBodies, contacts, gravity_part, h, threshold, iterations,
+                       warm):
+    """Jacobi with mass splitting: all contacts from the same velocities, impulses summed.
+
+    Same parameters and return value as `solve_sequential`. In a collision sweep a body's mass
+    is shared among the contacts that collide in that sweep; in a resting pass, among all its
+    contacts.
+    """
+    every = np.arange(len(contacts))
+    collisions = []
+    for _ in range(iterations):
+        hit = _collide_together(bodies, contacts, gravity_part, threshold)
+        if hit is None:
+            break
+        collisions.append(hit)
+
+    share = _count(bodies, contacts.a, contacts.b)
+    k_normal, k_tangent = _masses(bodies, contacts, share)
+    normal_total, tangent_total = warm
+    _apply_warm_start(bodies, contacts, normal_total, tangent_total)
+    target = _resting_target(contacts, h)
+    for _ in range(iterations):
+        if _rest(bodies, contacts, every, target, k_normal, k_tangent, normal_total,
+                 tangent_total) < SETTLED:
+            break
+    return collisions
+
+
+SOLVERS = {"sequential": solve_sequential, "simultaneous": solve_simultaneous}
+
+
+def sequential_levels(a, b, static: int) -> list:
+    """Split contacts 0..K-1 into levels that can each be solved at once, keeping their order.
+
+    Contact k's level is one more than the highest level of any earlier contact that shares a
+    moving body with it (the static world, index ``static``, is shared freely: it never moves).
+    Returns a list of (L_i,) index arrays, in order.
+    """
+    last = {}
+    level_of = []
+    for body_a, body_b in zip(a.tolist(), b.tolist()):
+        level = max(last.get(body_a, -1), last.get(body_b, -1) if body_b != static else -1) + 1
+        level_of.append(level)
+        last[body_a] = level
+        if body_b != static:
+            last[body_b] = level
+    if not level_of:
+        return []
+    level_of = np.asarray(level_of)
+    order = np.argsort(level_of, kind="stable")
+    bounds = np.searchsorted(level_of[order], np.arange(1, level_of.max() + 1))
+    return np.split(order, bounds)
+
+
+def contact_keys(contacts, bodies: int, planes: int) -> np.ndarray:
+    """One int64 per contact that names it from step to step: (a, b) or (a, plane)."""
+    other = np.where(contacts.plane >= 0, bodies + 1 + contacts.plane, contacts.b)
+    return contacts.a * (bodies + 1 + planes) + other
+
+
+def warm_start(keys, previous, dtype):
+    """Last step's accumulated resting impulses for the contacts in ``keys`` (K,), 0 for new ones.
+
+    Starting from them is what lets a stack rest (Catto, GDC 2005, "warm starting"): the
+    weight of the top ball reaches the floor contact over several steps instead of needing
+    many passes within one. ``previous`` is (keys, normal, tangent) from the last step or None.
+    """
+    normal = np.zeros(len(keys), dtype)
+    tangent = np.zeros((len(keys), 3), dtype)
+    if previous is not None and len(previous[0]) and len(keys):
+        old_keys, old_normal, old_tangent = previous
+        slot = np.minimum(np.searchsorted(old_keys, keys), len(old_keys) - 1)
+        found = old_keys[slot] == keys
+        normal[found] = old_normal[slot[found]]
+        tangent[found] = old_tangent[slot[found]]
+    return normal, tangent
+
+
+def separate_overlaps(position, contacts, inverse_mass, slop, fraction):
+    """Push overlapping spheres apart by moving them, never by giving them speed.
+
+    Each contact deeper than ``slop`` (m) asks for ``fraction`` of its remaining depth to be
+    removed, shared between a and b in proportion to their inverse masses; a body in several
+    such contacts moves by the mean of their requests. Velocities are not touched, so no
+    kinetic energy appears (a Baumgarte velocity bias would turn the overlap into speed and
+    launch the spheres). This is the position stage of Box2D v2 (b2ContactSolver::
+    SolvePositionConstraints, with fraction 0.2 and a small slop left so contacts persist).
+
+    position : (N, 3) m, updated in place; contacts : Contacts; inverse_mass : (N + 1,) 1/kg.
+    """
+    deep = contacts.gap < -slop
+    if not deep.any():
+        return
+    a, b = contacts.a[deep], contacts.b[deep]
+    im_a, im_b = inverse_mass[a], inverse_mass[b]
+    depth = fraction * (-contacts.gap[deep] - slop) / (im_a + im_b)
+    push = depth[:, None] * contacts.normal[deep]
+    n = len(position)
+    total = np.zeros((n + 1, 3), position.dtype)
+    count = np.bincount(np.concatenate([a, b]), minlength=n + 1).astype(position.dtype)
+    np.add.at(total, a, push * im_a[:, None])
+    np.add.at(total, b, -push * im_b[:, None])
+    position += total[:n] / np.maximum(count[:n], 1)[:, None]
+
+
+def _masses(bodies, contacts, share):
+    """k_n, k_t (K,) with each body's inverse mass multiplied by ``share`` (its contact count
+    under mass splitting, 1 for the sequential solver)."""
+    im = bodies.inverse_mass * share
+    ii = bodies.inverse_inertia * share
+    a, b = contacts.a, contacts.b
+    return effective_masses(im[a], im[b], ii[a], ii[b], contacts.radius_a, contacts.radius_b)
+
+
+def _count(bodies, a, b):
+    """How many of the given contacts each body (row) is in, as the solver's float dtype."""
+    return np.bincount(np.concatenate([a, b]),
+                       minlength=len(bodies.velocity)).astype(bodies.velocity.dtype)
+
+
+def _collide_together(bodies, contacts, gravity_part, threshold):
+    """One Jacobi collision sweep: every contact from the same velocities, mass split among the
+    contacts that collide. Applied; None if nothing collides."""
+    a, b, n = contacts.a, contacts.b, contacts.normal
+    v_rel = relative_velocity(bodies, a, b, n, contacts.radius_a, contacts.radius_b)
+    approach = gravity_part - dot(v_rel, n)
+    colliding = np.flatnonzero(approach > threshold)
+    if len(colliding) == 0:
+        return None
+    share = _count(bodies, a[colliding], b[colliding])
+    k_normal, k_tangent = _masses(bodies, contacts, share)
+    return _collide(bodies, contacts, colliding, gravity_part, k_normal, k_tangent, threshold)
+
+
+def _resting_target(contacts, h):
+    """Lowest normal velocity allowed in resting contact: -gap/h lets a small gap close in one
+    step (a speculative contact, as in Box2D v3), 0 once the bodies touch."""
+    return -np.maximum(contacts.gap, 0) / h
+
+
+def _collide(bodies, contacts, index, gravity_part, k_normal, k_tangent, threshold):
+    """Collision impulses for contacts ``index``, applied; None if none of them collides."""
+    a, b, n = contacts.a[index], contacts.b[index], contacts.normal[index]
+    ra, rb = contacts.radius_a[index], contacts.radius_b[index]
+    v_rel = relative_velocity(bodies, a, b, n, ra, rb)
+    impulse, j, approach = collision_impulse(
+        v_rel, n, gravity_part[index], contacts.restitution[index], contacts.friction[index],
+        k_normal[index], k_tangent[index], threshold)
+    hit = j > 0
+    if not hit.any():
+        return None
+    apply_impulse(bodies, a[hit], b[hit], n[hit], ra[hit], rb[hit], impulse[hit])
+    return index[hit], approach[hit], j[hit]
+
+
+def _apply_warm_start(bodies, contacts, normal_total, tangent_total):
+    """Apply the starting impulses, the friction part turned into the current tangent plane."""
+    n = contacts.normal
+    tangent_total -= dot(tangent_total, n)[:, None] * n
+    impulse = normal_total[:, None] * n + tangent_total
+    apply_impulse(bodies, contacts.a, contacts.b, n, contacts.radius_a, contacts.radius_b,
+                  impulse)
+
+
+def _rest(bodies, contacts, index, target, k_normal, k_tangent, normal_total, tangent_total):
+    """One resting-contact pass over contacts ``index``: impulses applied, totals updated.
+
+    Returns the largest change of relative velocity it caused (m/s), 0 for no contacts.
+    """
+    if len(index) == 0:
+        return 0.0
+    a, b, n = contacts.a[index], contacts.b[index], contacts.normal[index]
+    ra, rb = contacts.radius_a[index], contacts.radius_b[index]
+    v_rel = relative_velocity(bodies, a, b, n, ra, rb)
+    normal_part, tangent_part = normal_total[index], tangent_total[index]
+    impulse = contact_impulse(v_rel, n, target[index], contacts.friction[index],
+                              k_normal[index], k_tangent[index], normal_part, tangent_part)
+    normal_total[index] = normal_part
+    tangent_total[index] = tangent_part
+    apply_impulse(bodies, a, b, n, ra, rb, impulse)
+    size = np.sqrt(dot(impulse, impulse))
+    return float(np.max(size * k_tangent[index]))

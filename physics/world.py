@@ -1,0 +1,327 @@
+"""The World: the state of every sphere and plane as plain arrays, and the step that advances it.
+
+Everything the simulation knows is an attribute a student can print: ``world.position`` is an
+(N, 3) array of centres, ``world.velocity`` their velocities, and so on. A step is the four
+stages of integrators.py written out in `World.step`, followed by the continuous collision
+test, the push-out of overlaps, and the removal of bodies that leave the bounds.
+"""
+
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+
+from marchlab.geometry import dot
+
+from physics.continuous import bounce_off_planes, stop_sphere_sweeps
+from physics.contacts import find_contacts, spread_coincident
+from physics.errors import (PhysicsError, bounds_box, choice, column, finite, float_dtype,
+                            in_range, positive, rows, vector3, whole_number)
+from physics.events import EVENT_DTYPE, make_events
+from physics.impulses import SolverBodies
+from physics.integrators import INTEGRATORS, integrate_velocities, parabola_start_velocity
+from physics.quaternions import rotate_orientations
+from physics.solvers import SOLVERS, contact_keys, separate_overlaps, warm_start
+
+SPAWN_OFFSET = 1e-3     # a sphere spawned on another's centre is moved this many radii away
+
+
+class World:
+    """Rigid spheres and static planes under uniform gravity, stepped with a fixed dt.
+
+    Parameters
+    ----------
+    gravity : (3,) array_like
+        Acceleration of gravity (m/s^2).
+    dt : float
+        Time step (s). Fixed: a step never depends on a frame rate.
+    integrator : {"semi_implicit", "explicit", "verlet"}
+        See integrators.py.
+    solver : {"sequential", "simultaneous"}
+        See solvers.py.
+    dtype : {numpy.float64, numpy.float32, "float64", "float32"}
+        Precision of every state array and of the arithmetic of a step.
+    seed : int
+        Seeds the random offset given to a sphere spawned on another's centre.
+    bounds : ((3,), (3,)) array_like or None
+        Corners (m) of the box outside which a body is removed (with a "left-bounds" event).
+    iterations : int
+        Most collision sweeps and resting-contact passes per step.
+    restitution_threshold : float
+        Contacts approaching slower than this (m/s) do not bounce, so resting contact rests.
+    slop : float
+        Surfaces closer than this (m) are in contact; overlaps up to it are left alone.
+    push_out : float
+        Fraction of a deeper overlap removed per step by moving the bodies (0 to 1).
+    """
+
+    def __init__(self, gravity=(0.0, -9.81, 0.0), dt=1 / 240, integrator="semi_implicit",
+                 solver="sequential", dtype=np.float64, seed=0,
+                 bounds=((-1e3, -1e3, -1e3), (1e3, 1e3, 1e3)), iterations=10,
+                 restitution_threshold=0.01, slop=1e-4, push_out=0.2):
+        self.dtype = float_dtype(dtype)
+        self.gravity = vector3(gravity, "gravity").astype(self.dtype)
+        self.dt = positive(dt, "dt")
+        self.integrator = choice(integrator, "integrator", list(INTEGRATORS))
+        self.solver = choice(solver, "solver", list(SOLVERS))
+        self.seed = whole_number(seed, "seed", 0)
+        self.bounds = bounds_box(bounds)
+        self.iterations = whole_number(iterations, "iterations", 1)
+        self.restitution_threshold = in_range(restitution_threshold, "restitution_threshold", 0)
+        self.slop = in_range(slop, "slop", 0)
+        self.push_out = in_range(push_out, "push_out", 0, 1)
+        self.rng = np.random.default_rng(self.seed)
+        self.steps = 0
+        empty = lambda *shape: np.zeros((0,) + shape, self.dtype)  # noqa: E731
+        self.position, self.velocity, self.angular_velocity = empty(3), empty(3), empty(3)
+        self.orientation = empty(4)
+        self.radius, self.mass, self.restitution, self.friction = empty(), empty(), empty(), empty()
+        self.active = np.zeros(0, bool)
+        self.plane_normal, self.plane_offset = empty(3), empty()
+        self.plane_restitution, self.plane_friction = empty(), empty()
+        self._events = []
+        self._resting_impulses = None     # (keys, normal, tangent) of last step's contacts
+
+    # --- building -----------------------------------------------------------------------
+
+    def add_sphere(self, position, velocity=(0.0, 0.0, 0.0), radius=0.1, mass=None,
+                   density=None, restitution=0.5, friction=0.5,
+                   angular_velocity=(0.0, 0.0, 0.0)) -> int:
+        """Add one solid sphere and return its index.
+
+        Parameters
+        ----------
+        position, velocity, angular_velocity : (3,) array_like
+            Centre (m), velocity (m/s) and angular velocity (rad/s).
+        radius : float
+            Radius (m), > 0.
+        mass, density : float, optional
+            Mass (kg) or density (kg/m^3, mass = 4/3 pi r^3 density); give at most one.
+            Neither: 1 kg.
+        restitution : float
+            Coefficient of restitution e in [0, 1]; a pair bounces with max(e_a, e_b).
+        friction : float
+            Coefficient of friction mu >= 0; a pair slides with sqrt(mu_a mu_b).
+        """
+        return int(self.add_spheres([vector3(position, "position")],
+                                    [vector3(velocity, "velocity")], radius, mass, density,
+                                    restitution, friction,
+                                    [vector3(angular_velocity, "angular_velocity")])[0])
+
+    def add_spheres(self, positions, velocities=None, radius=0.1, mass=None, density=None,
+                    restitution=0.5, friction=0.5, angular_velocities=None) -> np.ndarray:
+        """Add M spheres at once (positions (M, 3); the other values scalars or (M,) / (M, 3)).
+
+        Returns their indices, (M,) int. A sphere whose centre is exactly that of another is
+        moved by SPAWN_OFFSET radii in a random direction drawn from the world's seeded
+        generator (source 000 does the same, unseeded), so the pair separates the same way
+        every run with the same seed.
+        """
+        positions = rows(positions, "position")
+        m = len(positions)
+        velocities = np.zeros((m, 3)) if velocities is None else rows(velocities, "velocity", m)
+        spins = (np.zeros((m, 3)) if angular_velocities is None
+                 else rows(angular_velocities, "angular_velocity", m))
+        radius = column(radius, "radius", m, positive)
+        if mass is not None and density is not None:
+            raise PhysicsError("give mass or density, not both")
+        if density is not None:
+            mass = 4 / 3 * np.pi * radius ** 3 * column(density, "density", m, positive)
+        else:
+            mass = column(1.0 if mass is None else mass, "mass", m, positive)
+        restitution = column(restitution, "restitution", m, lambda v, n: in_range(v, n, 0, 1))
+        friction = column(friction, "friction", m, lambda v, n: in_range(v, n, 0))
+
+        positions = spread_coincident(self.position, positions.astype(self.dtype),
+                                      SPAWN_OFFSET * radius, self.rng)
+        first = self.count
+        grow = lambda old, new: np.concatenate([old, np.asarray(new, self.dtype)])  # noqa: E731
+        self.position = grow(self.position, positions)
+        self.velocity = grow(self.velocity, velocities)
+        self.angular_velocity = grow(self.angular_velocity, spins)
+        self.orientation = grow(self.orientation, np.tile([1.0, 0.0, 0.0, 0.0], (m, 1)))
+        self.radius = grow(self.radius, radius)
+        self.mass = grow(self.mass, mass)
+        self.restitution = grow(self.restitution, restitution)
+        self.friction = grow(self.friction, friction)
+        self.active = np.concatenate([self.active, np.ones(m, bool)])
+        return np.arange(first, first + m)
+
+    def add_plane(self, normal, offset, restitution=0.0, friction=0.5) -> int:
+        """Add the static plane ``normal . x = offset`` (solid on the side away from ``normal``).
+
+        ``normal`` need not be unit length (both sides are divided by its length) but must not
+        be zero. Returns the plane's index.
+        """
+        normal = vector3(normal, "normal")
+        length = float(np.sqrt(normal @ normal))
+        if length == 0:
+            raise PhysicsError("normal must not be the zero vector")
+        offset = finite(offset, "offset")
+        grow = lambda old, new: np.concatenate([old, np.asarray(new, self.dtype)])  # noqa: E731
+        self.plane_normal = grow(self.plane_normal, [normal / length])
+        self.plane_offset = grow(self.plane_offset, [offset / length])
+        self.plane_restitution = grow(self.plane_restitution,
+                                      [in_range(restitution, "restitution", 0, 1)])
+        self.plane_friction = grow(self.plane_friction, [in_range(friction, "friction", 0)])
+        return len(self.plane_offset) - 1
+
+    # --- derived state ------------------------------------------------------------------
+
+    @property
+    def count(self) -> int:
+        """Number of spheres N (removed ones included: indices never change)."""
+        return len(self.radius)
+
+    @property
+    def time(self) -> float:
+        """Simulated time (s): steps x dt, so it does not accumulate rounding."""
+        return self.steps * self.dt
+
+    @property
+    def inverse_mass(self) -> np.ndarray:
+        """1/m (N,) in 1/kg."""
+        return 1 / self.mass
+
+    @property
+    def inverse_inertia(self) -> np.ndarray:
+        """1/I (N,) in 1/(kg m^2), with I = 2/5 m r^2 for a solid sphere."""
+        return 1 / (0.4 * self.mass * self.radius * self.radius)
+
+    def kinetic_energy(self) -> float:
+        """Translational plus rotational kinetic energy of the active spheres (J)."""
+        v, w = self.velocity[self.active], self.angular_velocity[self.active]
+        m, r = self.mass[self.active], self.radius[self.active]
+        return float(np.sum(0.5 * m * np.sum(v * v, axis=1))
+                     + np.sum(0.5 * (0.4 * m * r * r) * np.sum(w * w, axis=1)))
+
+    def potential_energy(self) -> float:
+        """Gravitational potential energy -sum m g.x of the active spheres (J), zero at x = 0."""
+        x, m = self.position[self.active], self.mass[self.active]
+        return float(-np.sum(m * (x @ self.gravity)))
+
+    def energy(self) -> float:
+        """Kinetic + rotational + potential energy (J)."""
+        return self.kinetic_energy() + self.potential_energy()
+
+    def momentum(self) -> np.ndarray:
+        """Total linear momentum of the active spheres, (3,) in kg m/s."""
+        return np.sum(self.mass[self.active, None] * self.velocity[self.active], axis=0)
+
+    @property
+    def events(self) -> np.ndarray:
+        """Every contact event so far, a structured array of EVENT_DTYPE, in order."""
+        if not self._events:
+            return np.zeros(0, EVENT_DTYPE)
+        return np.concatenate(self._events)
+
+    def copy(self, dtype=None) -> "World":
+        """An independent copy, optionally converted to another precision."""
+        other = copy.deepcopy(self)
+        if dtype is not None:
+            other.dtype = float_dtype(dtype)
+            for name in ("gravity", "position", "velocity", "angular_velocity", "orientation",
+                         "radius", "mass", "restitution", "friction", "plane_normal",
+                         "plane_offset", "plane_restitution", "plane_friction"):
+                setattr(other, name, getattr(other, name).astype(other.dtype))
+            if other._resting_impulses is not None:
+                keys, normal, tangent = other._resting_impulses
+                other._resting_impulses = (keys, normal.astype(other.dtype),
+                                           tangent.astype(other.dtype))
+        return other
+
+    # --- stepping -----------------------------------------------------------------------
+
+    def step(self, n: int = 1) -> None:
+        """Advance the world by ``n`` steps of ``dt``."""
+        for _ in range(whole_number(n, "n", 0)):
+            self._step()
+
+    def _step(self) -> None:
+        h = self.dtype(self.dt)
+        n = self.count
+        scheme = INTEGRATORS[self.integrator]
+        moving = self.active
+        x_old, v_old = self.position, self.velocity
+
+        # 1. integrate velocities: v* = v_n + h g
+        v = integrate_velocities(v_old, self.gravity, h, moving)
+
+        # 2. find contacts at x_n. A sphere still approaching a plane it has not reached (gap
+        # >= 0) is left to the continuous test below, which finds the moment it reaches the
+        # plane: bouncing it here, a little above the plane, would use the wrong speed.
+        contacts = find_contacts(self, self.slop)
+        approach = -dot(contacts.normal, v_old[contacts.a])
+        arriving = (contacts.plane >= 0) & (contacts.gap >= 0) & (
+            approach > self.restitution_threshold)
+        contacts = contacts.select(~arriving)
+
+        # 3. resolve contacts: impulses turn v* into v_{n+1}
+        pad = lambda array: np.concatenate([array, np.zeros((1,) + array.shape[1:],  # noqa: E731
+                                                            self.dtype)])
+        bodies = SolverBodies(pad(v), pad(self.angular_velocity), pad(self.inverse_mass),
+                              pad(self.inverse_inertia))
+        # What this step's gravity added to each contact's normal velocity (plane contacts only:
+        # two falling spheres both gain h g, which cancels in their relative velocity).
+        gravity_part = np.where(contacts.plane >= 0, h * dot(contacts.normal, self.gravity), 0)
+        keys = contact_keys(contacts, n, len(self.plane_offset))
+        order = np.argsort(keys, kind="stable")
+        warm = warm_start(keys, self._resting_impulses, self.dtype)
+        collisions = SOLVERS[self.solver](bodies, contacts, gravity_part.astype(self.dtype), h,
+                                          self.restitution_threshold, self.iterations, warm)
+        self._resting_impulses = (keys[order], warm[0][order], warm[1][order])
+        v_new, spin = bodies.velocity[:n], bodies.spin[:n]
+
+        # 4. integrate positions (and orientations, with the same scheme)
+        x_new = scheme.positions(x_old, v_old, v_new, h)
+        turn = scheme.positions(np.zeros_like(spin), self.angular_velocity, spin, h)
+        self.orientation = rotate_orientations(self.orientation, turn)
+
+        # Continuous collision: bounce off planes crossed during the step, exactly ...
+        touching = np.zeros((n, len(self.plane_offset)), bool)
+        plane = contacts.plane >= 0
+        touching[contacts.a[plane], contacts.plane[plane]] = True
+        acceleration = (v_new - v_old) / h
+        start_velocity = parabola_start_velocity(scheme, v_old, v_new, h)
+        bounced, end, end_velocity, end_acceleration, hits = bounce_off_planes(
+            self, x_old, start_velocity, acceleration, spin, touching, h)
+        x_new[bounced] = end[bounced]
+        # ... and leave the velocity the integrator needs to carry on along the new parabola.
+        v_new[bounced] = (end_velocity[bounced]
+                          - (scheme.weight - 0.5) * h * end_acceleration[bounced])
+        # ... and stop spheres at their first touch with another.
+        stop_sphere_sweeps(x_old, x_new, self.radius, moving, self.slop)
+
+        separate_overlaps(x_new, contacts, bodies.inverse_mass, self.slop, self.push_out)
+
+        self.position, self.velocity, self.angular_velocity = x_new, v_new, spin
+        self.steps += 1
+        self._record(contacts, collisions, hits)
+        self._remove_out_of_bounds()
+
+    def _record(self, contacts, collisions, hits) -> None:
+        for index, approach, impulse in collisions:
+            plane = contacts.plane[index]
+            self._add_events(contacts.kind()[index], contacts.a[index],
+                             np.where(plane >= 0, plane, contacts.b[index]), approach, impulse)
+        for body, plane, approach, impulse in hits:
+            self._add_events("sphere-plane", body, plane, approach, impulse)
+
+    def _add_events(self, kind, body, other, speed, impulse) -> None:
+        self._events.append(make_events(self.steps, self.time, kind, body, other, speed,
+                                        impulse))
+
+    def _remove_out_of_bounds(self) -> None:
+        if self.bounds is None:
+            return
+        low, high = self.bounds
+        outside = self.active & np.any((self.position < low) | (self.position > high), axis=1)
+        if outside.any():
+            body = np.flatnonzero(outside)
+            self.active = self.active & ~outside
+            speed = np.sqrt(np.sum(self.velocity[body] ** 2, axis=1))
+            self.velocity[body] = 0
+            self.angular_velocity[body] = 0
+            self._add_events("left-bounds", body, np.full(len(body), -1), speed,
+                             np.zeros(len(body)))
