@@ -17,6 +17,7 @@ from __future__ import annotations
 
 from functools import reduce
 
+from .bodies import Body, PhysicsSettings
 from .scene import (Camera, Checker, DirectionalLight, Fog, Material, PointLight,
                     RenderSettings, Scene, SkyBackground, SolidBackground, SpotLight)
 from .shapes import (Box, Capsule, CappedCylinder, Cone, Node, Plane, RoundBox, Sphere, Torus)
@@ -24,7 +25,7 @@ from .shapes import (Box, Capsule, CappedCylinder, Cone, Node, Plane, RoundBox, 
 __all__ = ["sphere", "box", "round_box", "plane", "torus", "capped_cylinder", "capsule", "cone",
            "union", "intersection", "Scene", "Camera", "RenderSettings", "Material", "Checker",
            "PointLight", "DirectionalLight", "SpotLight", "Fog", "SkyBackground",
-           "SolidBackground"]
+           "SolidBackground", "Body", "PhysicsSettings"]
 
 
 def _half_size(x, y, z):

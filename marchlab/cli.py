@@ -1,5 +1,5 @@
 """The ``marchlab`` command: render scenes, list and print them, print a scene's generated
-shader, and compare two backends pixel by pixel.
+shader, compare two backends pixel by pixel, and simulate a scene's bodies into an animation.
 
 A user error (a bad file, field, size or option) ends with one line on stderr and exit code 2;
 anything else is a bug and keeps its traceback.
@@ -8,17 +8,22 @@ anything else is a bug and keeps its traceback.
 from __future__ import annotations
 
 import argparse
+import math
 import sys
+import tempfile
 import time
 from contextlib import contextmanager
 from pathlib import Path
 
-from .errors import MarchlabError
+from .bodies import rendered_scene, scene_at
+from .errors import MarchlabError, SceneError
+from .files import write_atomically
 from .frame import AOVS
-from .render import BACKENDS, MAX_SIDE, PRECISIONS, render
+from .render import BACKENDS, MAX_SIDE, PRECISIONS, backend_problem, render
 from .scenefile import bundled_scene_names, load_scene, scene_to_toml
 
 OUTPUT_SUFFIXES = (".png", ".npz")
+DASHED_VALUE_OPTIONS = ("--size", "--seconds", "--fps")
 
 
 class Parser(argparse.ArgumentParser):
@@ -41,16 +46,27 @@ def parse_size(text: str) -> tuple[int, int]:
     return width, height
 
 
+def positive_number(text: str) -> float:
+    """``"2.5"`` -> 2.5, refusing zero, negative and non-finite numbers."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"expected a positive number (got {text!r})")
+    return value
+
+
 def _attach_dashed_values(argv: list[str]) -> list[str]:
-    """Write ``--size -5x5`` as ``--size=-5x5``.
+    """Write ``--size -5x5`` as ``--size=-5x5`` (and ``--fps -1`` as ``--fps=-1``).
 
     argparse takes a value starting with "-" for an option, and would answer "expected one
-    argument" instead of saying what is wrong with the size.
+    argument" instead of saying what is wrong with the value.
     """
     out = []
     for arg in map(str, argv):
-        if out and out[-1] == "--size" and arg.startswith("-"):
-            out[-1] = f"--size={arg}"
+        if out and out[-1] in DASHED_VALUE_OPTIONS and arg.startswith("-"):
+            out[-1] = f"{out[-1]}={arg}"
         else:
             out.append(arg)
     return out
@@ -108,6 +124,26 @@ def build_parser() -> Parser:
                    help="also write both images, an amplified difference and the error mask")
     p.add_argument("--set", action="extend", nargs="+", default=[], metavar="FIELD=VALUE")
     p.set_defaults(func=cmd_compare)
+
+    p = sub.add_parser("simulate", help="step a scene's [[bodies]] with the physics module and "
+                                        "render them into an animated GIF (or .mp4)")
+    p.add_argument("scene", help="bundled scene name (e.g. bounce) or a .toml path")
+    p.add_argument("-o", "--output", help="output file, .gif or .mp4 (default: SCENE.gif)")
+    p.add_argument("--seconds", type=positive_number, default=5.0,
+                   help="simulated time in seconds (default: 5)")
+    p.add_argument("--fps", type=positive_number, default=30.0,
+                   help="frames per second of the animation (default: 30); the physics "
+                        "time step stays the scene's [physics] dt")
+    p.add_argument("--size", type=parse_size, default=(320, 240), metavar="WxH",
+                   help="frame size in pixels (default: 320x240)")
+    p.add_argument("--backend", choices=list(BACKENDS), default=None,
+                   help="renderer (default: gpu if it can run here, else numpy)")
+    p.add_argument("--csv", metavar="FILE",
+                   help="also write the trajectory: one row per frame and body")
+    p.add_argument("--set", action="extend", nargs="+", default=[], metavar="FIELD=VALUE",
+                   help="override scene fields, e.g. --set physics.dt=0.001 "
+                        "bodies[0].restitution=0.9")
+    p.set_defaults(func=cmd_simulate)
     return parser
 
 
@@ -146,13 +182,13 @@ def cmd_render(args) -> int:
 
 
 @contextmanager
-def progress_bar(total: int):
+def progress_bar(total: int, unit: str = "px"):
     """A progress callback drawing a bar on stderr, shown only on a terminal after 1 s."""
     if not sys.stderr.isatty():
         yield None
         return
     from tqdm import tqdm
-    with tqdm(total=total, unit="px", unit_scale=True, delay=1.0, leave=False,
+    with tqdm(total=total, unit=unit, unit_scale=unit == "px", delay=1.0, leave=False,
               file=sys.stderr) as bar:
         yield lambda done, _total: bar.update(done - bar.n)
 
@@ -173,7 +209,7 @@ def cmd_show(args) -> int:
 def cmd_shader(args) -> int:
     scene = load_scene(args.scene, args.set)
     from gpu_shader.generate import generate     # no OpenGL needed to generate
-    source = generate(scene, 640, 480, dialect=args.dialect).source
+    source = generate(rendered_scene(scene), 640, 480, dialect=args.dialect).source
     if args.numbered:
         lines = source.splitlines()
         width = len(str(len(lines)))
@@ -206,6 +242,88 @@ def cmd_compare(args) -> int:
         print(f"FAIL {line}")
     print("PASS" if not failed else f"FAIL ({len(failed)} gates)")
     return 1 if failed else 0
+
+
+def cmd_simulate(args) -> int:
+    from physics import PhysicsError
+    from .animation import FORMATS, gif_bytes, mp4_problem, write_mp4
+    from .simulation import frame_plan, physics_settings, simulate_scene
+    output = Path(args.output) if args.output else Path(f"{Path(args.scene).stem}.gif")
+    kind = output.suffix.lower()
+    if kind not in FORMATS:
+        raise MarchlabError(f"{output}: unsupported output format {output.suffix!r} "
+                            "(use .gif or .mp4)")
+    if kind == ".mp4" and mp4_problem():
+        raise MarchlabError(f"{output}: {mp4_problem()}")
+    scene = load_scene(args.scene, args.set)
+    if not scene.bodies:
+        raise MarchlabError(f"{args.scene}: has no [[bodies]] to simulate")
+    backend = args.backend or ("gpu" if backend_problem("gpu") is None else "numpy")
+    if args.backend and backend_problem(backend):
+        raise MarchlabError(f"the {backend} backend cannot run here: {backend_problem(backend)}")
+
+    # The step is the scene's fixed dt; the frame rate only says how often to look.
+    dt = physics_settings(scene).dt
+    plan = frame_plan(dt, args.fps, args.seconds)
+    if not plan.exact:
+        print(f"marchlab: note: 1/fps = {1 / args.fps:.6g} s is not a multiple of dt = "
+              f"{dt:.6g} s; a frame every {plan.record_every} steps ({plan.frame_seconds:.6g} s "
+              "of simulated time)", file=sys.stderr)
+    start = time.perf_counter()
+    try:
+        trajectory = simulate_scene(scene, plan)
+    except SceneError as err:
+        raise err.in_file(args.scene) from None
+    except PhysicsError as err:
+        raise MarchlabError(f"{args.scene}: physics: {err}") from None
+
+    width, height = args.size
+    images = render_frames(scene, trajectory.positions, width, height, backend)
+
+    try:
+        for path in (output, Path(args.csv) if args.csv else None):
+            if path is not None:
+                path.parent.mkdir(parents=True, exist_ok=True)
+        if kind == ".gif":
+            write_atomically(output, gif_bytes(images, plan.frame_seconds))
+        else:
+            write_mp4(output, images, 1 / plan.frame_seconds)
+        if args.csv:
+            write_atomically(args.csv, trajectory_csv(trajectory))
+    except OSError as err:
+        raise MarchlabError(f"{err.filename or output}: cannot write: {err.strerror}") from None
+    seconds = time.perf_counter() - start
+    print(f"wrote {output} ({plan.frames} frames of {width}x{height} from t = 0 to "
+          f"{plan.steps * dt:.6g} s, {plan.steps} steps of dt = {dt:.6g} s, {backend}, "
+          f"{seconds:.2f} s)")
+    if args.csv:
+        print(f"wrote {args.csv} ({len(trajectory.times)} records of "
+              f"{trajectory.positions.shape[1]} bodies)")
+    return 0
+
+
+def render_frames(scene, positions, width: int, height: int, backend: str) -> list:
+    """One 8-bit RGB image (H, W, 3) per row of ``positions`` (T, N, 3), with a progress bar.
+
+    Only the bodies' positions change from frame to frame, so the GPU backend compiles its
+    program for the first frame and reuses it for the others.
+    """
+    images = []
+    with progress_bar(len(positions), unit="frame") as progress:
+        for index, centres in enumerate(positions):
+            frame = render(scene_at(scene, centres), width, height, backend=backend)
+            images.append(frame.image("color"))
+            if progress:
+                progress(index + 1, len(positions))
+    return images
+
+
+def trajectory_csv(trajectory) -> bytes:
+    """The bytes `physics.Trajectory.to_csv` writes (so the file can be written atomically)."""
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / "trajectory.csv"
+        trajectory.to_csv(path)
+        return path.read_bytes()
 
 
 if __name__ == "__main__":

@@ -13,6 +13,7 @@ import sys
 import typing
 from pathlib import Path
 
+from .bodies import Body, PhysicsSettings
 from .fields import field_types, show
 from .scene import (Background, Camera, Checker, Fog, Light, Material, RenderSettings, Scene)
 from .shapes import node_kinds
@@ -90,6 +91,8 @@ def reference() -> str:
             "(a positive number); see *Transforms* above.", ""]
     for kind, cls in node_kinds().items():
         out += section(f'`type = "{kind}"`', cls)
+    out += section("`[physics]`", PhysicsSettings)
+    out += section("`[[bodies]]`", Body)
     out.append(END)
     return "\n".join(out) + "\n"
 

@@ -10,10 +10,10 @@ import importlib
 from dataclasses import dataclass
 from typing import Callable
 
+from .bodies import rendered_scene
 from .errors import MarchlabError
 from .frame import Frame
 from .scene import Scene
-
 
 
 @dataclass(frozen=True)
@@ -47,7 +47,8 @@ def render(scene: Scene, width: int, height: int, backend: str = "numpy",
     Parameters
     ----------
     scene : Scene
-        From `marchlab.load_scene` or built in Python.
+        From `marchlab.load_scene` or built in Python. Its bodies are drawn as spheres at
+        their positions (`marchlab.bodies.scene_objects`).
     width, height : int
         Image size in pixels.
     backend : str
@@ -73,7 +74,9 @@ def render(scene: Scene, width: int, height: int, backend: str = "numpy",
         raise MarchlabError(f"scene must be a marchlab.Scene (got {type(scene).__name__}); "
                             "use marchlab.load_scene(name_or_path)")
     module = importlib.import_module(BACKENDS[backend].module)
-    return module.render(scene, width, height, precision=precision, progress=progress)
+    # Backends draw objects only: the bodies become spheres after the scene's objects.
+    return module.render(rendered_scene(scene), width, height, precision=precision,
+                         progress=progress)
 
 
 def backend_problem(backend: str) -> str | None:

@@ -1,4 +1,4 @@
-"""The scene as plain data: camera, render settings, materials, lights and the SDF tree.
+"""The scene as plain data: camera, render settings, materials, lights, the SDF tree and bodies.
 
 A `Scene` is what every backend reads and none owns. It is immutable: change a copy with
 ``dataclasses.replace``. `marchlab.load_scene` / `marchlab.save_scene` move it to and from TOML;
@@ -11,6 +11,7 @@ import math
 from dataclasses import dataclass
 from typing import ClassVar, Literal
 
+from .bodies import Body, PhysicsSettings
 from .errors import SceneError
 from .fields import (Color, Record, Vec3, at_least, between, between_open, color_range,
                      nonnegative, nonzero, param, positive, unit_interval)
@@ -188,7 +189,8 @@ def _default_materials():
 
 @dataclass(frozen=True)
 class Scene(Record):
-    """Everything a renderer needs. ``objects`` are joined by union."""
+    """Everything a renderer needs. ``objects`` are joined by union; ``bodies`` are drawn as
+    spheres after them and moved by the physics step."""
     description: str = param("", "One line shown by ``marchlab scenes``.")
     camera: Camera = param(factory=Camera, doc="The camera.")
     render: RenderSettings = param(factory=RenderSettings, doc="Render settings.")
@@ -196,10 +198,17 @@ class Scene(Record):
                                            doc="Materials by name.")
     lights: tuple[Light, ...] = param(factory=_default_lights, doc="Light sources.")
     objects: tuple[Node, ...] = param((), "The shapes; their union is the scene.")
+    physics: PhysicsSettings | None = param(None, "How bodies are simulated; absent: the "
+                                                  "defaults of [physics].")
+    bodies: tuple[Body, ...] = param((), "Dynamic spheres, simulated and drawn.")
 
     def check(self):
+        known = ", ".join(sorted(self.materials)) or "none"
         for index, prim in enumerate(primitives(self.objects)):
             if prim.material not in self.materials:
-                known = ", ".join(sorted(self.materials)) or "none"
                 raise SceneError(f"primitive {index} ({prim.kind}) uses unknown material "
                                  f"{prim.material!r} (defined: {known})", ("materials",))
+        for index, body in enumerate(self.bodies):
+            if body.material not in self.materials:
+                raise SceneError(f"unknown material {body.material!r} (defined: {known})",
+                                 ("bodies", index, "material"))

@@ -1,10 +1,10 @@
 """Scenes to and from TOML files (read with `tomllib`, written with `tomlkit`).
 
-The file mirrors the dataclasses of `marchlab.scene` one table per record, with a ``type`` key
-where a field can hold several classes (objects, lights, background). One shorthand keeps files
-short: any object table may carry ``position``, ``rotation`` and ``scale``, which mean
-``translate(rotate(scale(node)))``. Saving writes that shorthand wherever it applies, so
-``load_scene(p) == scene`` after ``save_scene(scene, p)``.
+The file mirrors the dataclasses of `marchlab.scene` one table per record (``[physics]`` and
+``[[bodies]]`` included), with a ``type`` key where a field can hold several classes (objects,
+lights, background). One shorthand keeps files short: any object table may carry ``position``,
+``rotation`` and ``scale``, which mean ``translate(rotate(scale(node)))``. Saving writes that
+shorthand wherever it applies, so ``load_scene(p) == scene`` after ``save_scene(scene, p)``.
 
 Every error names the file and the path of the field inside it (``objects[2].radius``).
 """
@@ -27,7 +27,7 @@ from .errors import SceneError
 from .fields import field_types
 from .files import write_atomically
 from .scene import Background, Light, Scene
-from .shapes import Node, Primitive, Rotate, Scale, Translate, node_kinds
+from .shapes import Node, Rotate, Scale, Translate, node_kinds
 
 # Shorthand keys on an object table, outermost first, and the transform each one stands for.
 SHORTHAND = {"position": (Translate, "offset"), "rotation": (Rotate, "degrees"),
@@ -116,7 +116,7 @@ def _record(cls, table: Any, path: tuple, materials) -> Any:
             kwargs[f.name] = _value(hints[f.name], table[f.name], path + (f.name,), materials)
         elif f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:
             raise SceneError(f"missing key {f.name!r}", path)
-    if issubclass(cls, Primitive) and materials is not None:
+    if "material" in names and materials is not None:          # a primitive or a body
         name = kwargs.get("material", "default")
         if isinstance(name, str) and name not in materials:
             known = ", ".join(sorted(materials)) or "none"
@@ -287,8 +287,10 @@ def scene_to_toml(scene: Scene) -> str:
     data = scene_to_dict(scene)
     doc = tomlkit.document()
     doc.add(tomlkit.comment("marchlab scene (docs/scene-format.md describes every field)"))
-    for key in ("description", "camera", "render", "materials", "lights", "objects"):
-        if key in data:
+    for key in ("description", "camera", "render", "physics", "materials", "lights", "objects",
+                "bodies"):
+        # A scene without bodies is saved without ``bodies = []``, as it was before bodies.
+        if key in data and not (key == "bodies" and not data[key]):
             doc.add(key, data[key])
     return tomlkit.dumps(doc)
 

@@ -18,6 +18,7 @@ from hypothesis import strategies as st
 
 import marchlab
 from marchlab import SceneError, load_scene, save_scene
+from marchlab.bodies import Body, PhysicsSettings
 from marchlab.scene import (Camera, Checker, DirectionalLight, Fog, Material, PointLight,
                             RenderSettings, Scene, SkyBackground, SolidBackground, SpotLight)
 from marchlab.scenefile import scene_to_toml
@@ -27,7 +28,8 @@ from marchlab.shapes import (Box, Capsule, CappedCylinder, Cone, Intersection, P
 from marchlab.shapes import primitives as primitives_of
 
 BUNDLED = marchlab.bundled_scene_names()
-TOP_LEVEL_KEYS = {"description", "camera", "render", "materials", "lights", "objects"}
+TOP_LEVEL_KEYS = {"description", "camera", "render", "materials", "lights", "objects", "physics",
+                  "bodies"}
 
 
 def round_trip(scene: Scene, tmp_path, name: str = "scene.toml") -> Scene:
@@ -194,6 +196,23 @@ RENDER_SETTINGS = st.builds(
 
 TREES = trees(st.sampled_from(MATERIAL_NAMES))
 
+PHYSICS = st.none() | st.builds(
+    PhysicsSettings, gravity=VECTORS, dt=POSITIVE,
+    integrator=st.sampled_from(["semi_implicit", "explicit", "verlet"]),
+    solver=st.sampled_from(["sequential", "simultaneous"]), seed=st.integers(0, 2**63 - 1),
+    restitution=UNIT, friction=NONNEGATIVE, density=POSITIVE, plane_restitution=UNIT,
+    plane_friction=NONNEGATIVE)
+
+
+def bodies(material):
+    """Bodies with mass, density or neither (never both), optional restitution and friction."""
+    weight = st.one_of(st.just({}), st.builds(lambda m: {"mass": m}, POSITIVE),
+                       st.builds(lambda d: {"density": d}, POSITIVE))
+    return st.builds(lambda weight, **kwargs: Body(**weight, **kwargs), weight,
+                     position=VECTORS, velocity=VECTORS, angular_velocity=VECTORS,
+                     radius=POSITIVE, restitution=st.none() | UNIT,
+                     friction=st.none() | NONNEGATIVE, material=material)
+
 # Whole scenes are big: on a failure, shrink to one small example and skip the slow "explain"
 # phase, so a broken writer is reported in seconds rather than minutes.
 QUICK_TO_REPORT = dict(report_multiple_bugs=False,
@@ -203,12 +222,14 @@ QUICK_TO_REPORT = dict(report_multiple_bugs=False,
 @st.composite
 def scenes(draw):
     objects = draw(st.lists(TREES, max_size=3))
-    used = [prim.material for prim in primitives_of(objects)]
+    moving = draw(st.lists(bodies(st.sampled_from(MATERIAL_NAMES)), max_size=2))
+    used = [prim.material for prim in primitives_of(objects)] + [b.material for b in moving]
     names = dict.fromkeys(draw(st.lists(NAMES, min_size=1, max_size=2)) + used)
     return Scene(description=draw(st.text(max_size=20)), camera=draw(CAMERAS),
                  render=draw(RENDER_SETTINGS),
                  materials={name: draw(MATERIALS) for name in names},
-                 lights=draw(st.lists(LIGHTS, max_size=3)), objects=objects)
+                 lights=draw(st.lists(LIGHTS, max_size=3)), objects=objects,
+                 physics=draw(PHYSICS), bodies=moving)
 
 
 @settings(max_examples=100, **QUICK_TO_REPORT)

@@ -1,0 +1,118 @@
+"""The moving part of a scene: the ``[physics]`` settings and the dynamic spheres, ``[[bodies]]``.
+
+A `Body` is a solid sphere that the physics module moves and every renderer draws. It is plain
+data like the rest of the scene: `scene_objects` turns the bodies into one translated sphere
+each, appended after the scene's own objects, and `scene_at` gives the scene with its bodies
+moved to the centres of one time step. Stepping the world is marchlab/simulation.py's job.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Literal
+
+from .errors import SceneError
+from .fields import Vec3, Record, at_least, nonnegative, param, positive, unit_interval
+from .shapes import Node, Sphere, Translate
+
+if TYPE_CHECKING:
+    from .scene import Scene
+
+# The names physics.INTEGRATORS and physics.SOLVERS use (a test keeps the two lists equal;
+# marchlab.scene cannot import physics, which itself imports marchlab).
+Integrator = Literal["semi_implicit", "explicit", "verlet"]
+Solver = Literal["sequential", "simultaneous"]
+
+
+@dataclass(frozen=True)
+class PhysicsSettings(Record):
+    """How the bodies are stepped (see physics.World), and the values a body may leave out."""
+    gravity: Vec3 = param((0.0, -9.81, 0.0), "Acceleration of gravity (m/s^2).")
+    dt: float = param(1 / 240, "Fixed time step (s); never tied to the frame rate.", positive)
+    integrator: Integrator = param("semi_implicit", "Explicit Euler, semi-implicit "
+                                                    "(symplectic) Euler or velocity Verlet.")
+    solver: Solver = param("sequential", "Contact solver: Gauss-Seidel (sequential) or "
+                                         "Jacobi (simultaneous, as the GPU step does).")
+    seed: int = param(0, "Seeds the small random offset given to a body spawned on "
+                         "another's centre.", at_least(0))
+    restitution: float = param(0.5, "Coefficient of restitution of a body that gives none.",
+                               unit_interval)
+    friction: float = param(0.5, "Coefficient of friction of a body that gives none.",
+                            nonnegative)
+    density: float = param(1000.0, "Density (kg/m^3) of a body that gives neither mass nor "
+                                    "density (1000: water).", positive)
+    plane_restitution: float = param(0.0, "Coefficient of restitution of the static planes "
+                                          "(a pair bounces with the larger of its two).",
+                                     unit_interval)
+    plane_friction: float = param(0.5, "Coefficient of friction of the static planes (a pair "
+                                       "slides with the geometric mean of its two).",
+                                  nonnegative)
+
+
+@dataclass(frozen=True)
+class Body(Record):
+    """A dynamic solid sphere: moved by the physics step and drawn as a sphere."""
+    position: Vec3 = param((0.0, 1.0, 0.0), "Centre at t = 0 (m).")
+    velocity: Vec3 = param((0.0, 0.0, 0.0), "Velocity at t = 0 (m/s).")
+    angular_velocity: Vec3 = param((0.0, 0.0, 0.0), "Angular velocity at t = 0 (rad/s).")
+    radius: float = param(0.25, "Radius (m).", positive)
+    mass: float | None = param(None, "Mass (kg); absent: from density.", positive)
+    density: float | None = param(None, "Density (kg/m^3), mass = 4/3 pi r^3 density; "
+                                         "absent: [physics] density.", positive)
+    restitution: float | None = param(None, "Coefficient of restitution e; absent: "
+                                            "[physics] restitution.", unit_interval)
+    friction: float | None = param(None, "Coefficient of friction mu; absent: "
+                                         "[physics] friction.", nonnegative)
+    material: str = param("default", "Name of a material in the scene's [materials] table.")
+
+    def check(self):
+        if self.mass is not None and self.density is not None:
+            raise SceneError("give mass or density, not both", ("density",))
+
+
+def body_sphere(body: Body, position=None) -> Node:
+    """The object drawn for ``body``: a sphere of its radius translated to ``position``
+    (default: the body's own position)."""
+    centre = body.position if position is None else position
+    return Translate(Sphere(body.radius, material=body.material), centre)
+
+
+def scene_objects(scene: Scene, positions=None) -> tuple[Node, ...]:
+    """The objects a renderer draws: the scene's objects, then one sphere per body.
+
+    The bodies come last, so the object id of every static object (its depth-first index)
+    is the same with or without bodies.
+
+    Parameters
+    ----------
+    scene : Scene
+    positions : (N, 3) array_like, optional
+        Centres of the N bodies (default: their positions in the scene).
+    """
+    if positions is None:
+        positions = [None] * len(scene.bodies)
+    elif len(positions) != len(scene.bodies):
+        raise ValueError(f"expected {len(scene.bodies)} positions, got {len(positions)}")
+    return scene.objects + tuple(body_sphere(body, p) for body, p in zip(scene.bodies, positions))
+
+
+def scene_at(scene: Scene, positions) -> Scene:
+    """``scene`` with its bodies moved to ``positions`` ((N, 3), one row per body).
+
+    Only numbers change, so a generated shader's text (and the GPU's compiled program) is
+    the same for every time step.
+    """
+    if len(positions) != len(scene.bodies):
+        raise ValueError(f"expected {len(scene.bodies)} positions, got {len(positions)}")
+    bodies = tuple(dataclasses.replace(body, position=tuple(float(c) for c in p))
+                   for body, p in zip(scene.bodies, positions))
+    return dataclasses.replace(scene, bodies=bodies)
+
+
+def rendered_scene(scene: Scene) -> Scene:
+    """``scene`` with its bodies turned into objects (and none left as bodies), as a renderer
+    wants it; a scene without bodies is returned unchanged."""
+    if not scene.bodies:
+        return scene
+    return dataclasses.replace(scene, objects=scene_objects(scene), bodies=())

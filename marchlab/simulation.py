@@ -1,0 +1,167 @@
+"""From a scene to a physics world and back: the bodies stepped, then drawn frame by frame.
+
+`build_world` reads the scene's ``[physics]`` settings, its ``[[bodies]]`` and its floor and
+walls into a `physics.World`; `physics.simulate` steps it; `marchlab.bodies.scene_at` puts the
+recorded centres back into the scene for a renderer. `frame_plan` decides which steps become
+frames: the time step stays fixed, the frame rate only chooses how often to look.
+
+Which objects the bodies collide with: every **top-level plane** of ``objects``, moved by any
+number of ``translate`` wrappers (the ``position`` shorthand), is a static plane of the world.
+A plane that is rotated, scaled or inside a CSG operator is drawn but not collided with, and
+no other shape is collided with.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+import physics
+from physics import PhysicsError
+
+from .bodies import PhysicsSettings
+from .errors import MarchlabError, SceneError
+from .scene import Scene
+from .shapes import Plane, Translate
+
+
+def physics_settings(scene: Scene) -> PhysicsSettings:
+    """The scene's ``[physics]`` table, or its defaults if the scene has none."""
+    return scene.physics or PhysicsSettings()
+
+
+def static_planes(scene: Scene) -> list[tuple[tuple[float, float, float], float]]:
+    """The planes the bodies collide with, as (unit normal, offset) with ``n . x = offset``.
+
+    A scene's plane is ``n/|n| . x = offset`` (reference_cpu.sdf.sdf_plane); moved by ``t`` it
+    becomes ``n/|n| . x = offset + n/|n| . t``.
+    """
+    planes = []
+    for node in scene.objects:
+        shift = np.zeros(3)
+        while isinstance(node, Translate):
+            shift += node.offset
+            node = node.child
+        if isinstance(node, Plane):
+            normal = np.asarray(node.normal) / math.sqrt(np.dot(node.normal, node.normal))
+            planes.append((tuple(normal.tolist()), float(node.offset + normal @ shift)))
+    return planes
+
+
+def build_world(scene: Scene, dtype=np.float64) -> physics.World:
+    """A `physics.World` holding the scene's bodies (in order) and its static planes.
+
+    Parameters
+    ----------
+    scene : Scene
+    dtype : {numpy.float64, numpy.float32}
+        Precision of the world's state and arithmetic.
+
+    Raises
+    ------
+    SceneError
+        If the physics module refuses a value (say a mass that overflows to infinity), named
+        by the field path of the body or setting that holds it.
+    """
+    settings = physics_settings(scene)
+    try:
+        world = physics.World(gravity=settings.gravity, dt=settings.dt,
+                              integrator=settings.integrator, solver=settings.solver,
+                              dtype=dtype, seed=settings.seed)
+    except PhysicsError as err:
+        raise SceneError(str(err), ("physics",)) from None
+    for index, body in enumerate(scene.bodies):
+        # A body's own value wins; without one, [physics] supplies restitution, friction and
+        # the density its mass comes from.
+        mass, density = body.mass, body.density
+        if mass is None and density is None:
+            density = settings.density
+        try:
+            with np.errstate(over="ignore", divide="ignore"):   # checked just below
+                added = world.add_sphere(body.position, velocity=body.velocity,
+                                         radius=body.radius, mass=mass, density=density,
+                                         restitution=_either(body.restitution,
+                                                             settings.restitution),
+                                         friction=_either(body.friction, settings.friction),
+                                         angular_velocity=body.angular_velocity)
+                mass, inverse_inertia = world.mass[added], world.inverse_inertia[added]
+            # The impulses divide by m and by I = 2/5 m r^2: both must be finite and non-zero.
+            if not (np.isfinite(mass) and np.isfinite(inverse_inertia)):
+                raise PhysicsError(f"mass ({float(mass):.6g} kg) and moment of inertia "
+                                   f"(1/I = {float(inverse_inertia):.6g}) must be finite and "
+                                   "non-zero")
+        except PhysicsError as err:
+            raise SceneError(str(err), ("bodies", index)) from None
+    for normal, offset in static_planes(scene):
+        world.add_plane(normal, offset, restitution=settings.plane_restitution,
+                        friction=settings.plane_friction)
+    return world
+
+
+def _either(value, default):
+    return default if value is None else value
+
+
+@dataclass(frozen=True)
+class FramePlan:
+    """Which steps of a fixed-dt simulation become frames of an animation.
+
+    Attributes
+    ----------
+    record_every : int
+        Steps between two frames: round(1 / (fps dt)), at least 1.
+    frames : int
+        Number of frames: round(seconds fps), at least 1. Frame k shows step k record_every.
+    frame_seconds : float
+        Simulated time between two frames, record_every dt (s); equals 1/fps only when 1/fps
+        is a multiple of dt.
+    exact : bool
+        Whether 1/fps is a multiple of dt (to 1e-9 relative).
+    """
+    record_every: int
+    frames: int
+    frame_seconds: float
+    exact: bool
+
+    @property
+    def steps(self) -> int:
+        """Steps from the first frame to the last."""
+        return (self.frames - 1) * self.record_every
+
+
+def frame_plan(dt: float, fps: float, seconds: float) -> FramePlan:
+    """Plan ``seconds`` of animation at ``fps`` frames per second from steps of ``dt``."""
+    for name, value in (("fps", fps), ("seconds", seconds)):
+        if not (math.isfinite(value) and value > 0):
+            raise MarchlabError(f"{name} must be a positive number (got {value!r})")
+    frames = round(seconds * fps)
+    if frames < 1:
+        raise MarchlabError(f"{seconds!r} s at {fps!r} frames per second is less than one "
+                            "frame")
+    record_every = max(1, round(1 / (fps * dt)))
+    exact = math.isclose(record_every * dt, 1 / fps, rel_tol=1e-9)
+    return FramePlan(record_every, frames, record_every * dt, exact)
+
+
+def simulate_scene(scene: Scene, plan: FramePlan, dtype=np.float64) -> physics.Trajectory:
+    """Step the scene's world and record one state per frame of ``plan`` (frames records).
+
+    Raises
+    ------
+    SceneError
+        From `build_world`.
+    MarchlabError
+        If the state stops being finite (values so large that the arithmetic overflows).
+    """
+    world = build_world(scene, dtype)
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):   # checked below
+        trajectory = physics.simulate(world, plan.steps * world.dt,
+                                      record_every=plan.record_every)
+    finite = np.all(np.isfinite(trajectory.positions), axis=(1, 2))
+    if not finite.all():
+        time = trajectory.times[np.argmin(finite)]
+        raise MarchlabError(f"the simulation overflowed (positions not finite at t = {time:.6g} "
+                            "s); check the sizes in [physics] and [[bodies]]")
+    return trajectory
