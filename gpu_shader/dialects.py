@@ -45,7 +45,27 @@ def _glsl_struct(name: str, fields) -> str:
     return f"struct {name}\n{{\n{body}}};\n"
 
 
+# Above this many rows a per-pixel copy would cost more than it saves (and a GPU would spill
+# the array out of its registers): large scenes read everything from the uniform buffer.
+MAX_PRIVATE_ROWS = 256
+
+
 def _glsl_parameters(rows: int, fixed: int) -> str:
+    if fixed > MAX_PRIVATE_ROWS:
+        return f"""\
+layout(std140) uniform Parameters
+{{
+    vec4 U[{rows}];
+}};
+
+// {fixed} rows are read with fixed indices: too many to copy per pixel (more than
+// {MAX_PRIVATE_ROWS}), so P is the uniform buffer itself.
+#define P U
+
+void load_parameters()
+{{
+}}
+"""
     return f"""\
 layout(std140) uniform Parameters
 {{

@@ -263,3 +263,26 @@ def test_first_of_two_software_devices_draws(gpu, fresh_context, monkeypatch):
         release(made[:1])                # made[1] was released by _make_context
     assert reference.hit.sum() > 20
     assert (frame.hit != reference.hit).sum() <= SILHOUETTE_PIXELS
+
+
+def test_scene_too_large_for_a_private_copy_reads_the_buffer_and_matches_the_reference(gpu):
+    """Over MAX_PRIVATE_ROWS fixed rows, P is the uniform buffer itself; the image must not change.
+
+    200 spheres need 400 rows. Gates as in the equivalence suite (float32 reference).
+    """
+    from marchlab.builder import Checker, Material, Scene, plane, sphere
+    from marchlab.compare import compare_frames, failures, gates_against
+    from gpu_shader.dialects import MAX_PRIVATE_ROWS
+    from gpu_shader.generate import generate
+
+    objects = [plane(material="floor")] + [sphere(0.1).at(0.3 * i - 30, 0.1, -2)
+                                           for i in range(200)]
+    scene = Scene(objects=objects, materials={"floor": Material(checker=Checker()),
+                                              "default": Material()})
+    source = generate(scene, 64, 48).source
+    assert "#define P U" in source and len(objects) * 2 > MAX_PRIVATE_ROWS
+    reference = marchlab.render(scene, 64, 48, precision="float32")
+    frame = marchlab.render(scene, 64, 48, backend="gpu")
+    assert frame.hit.sum() > 0.5 * frame.hit.size
+    c = compare_frames(reference, frame, epsilon=scene.render.epsilon)
+    assert failures(c, gates_against("float32")) == []
