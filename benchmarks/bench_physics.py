@@ -10,6 +10,10 @@ perfectly linear, 100 would be quadratic from 100 to 10,000 spheres. Machines ar
 noisy: compare ratios from one run, not absolute times across runs. The lattice starts just
 above the floor, so by the end of the warm-up the spheres are settling into a pile with
 thousands of contacts.
+
+``--gpu`` adds rows for gpu_shader.physics (the same scene in float32, simultaneous solver,
+brute-force O(N^2) contacts; the default counts there are 100 and 1,000), timed with a
+read-back of the state at the end, as `physics.simulate` would do at a record.
 """
 
 from __future__ import annotations
@@ -65,6 +69,9 @@ def main(argv=None) -> int:
                         help="simulated seconds timed per scene (default 0.25, 60 steps)")
     parser.add_argument("--solver", action="append", choices=list(physics.SOLVERS),
                         help="solvers to time (default: both)")
+    parser.add_argument("--gpu", action="store_true",
+                        help="also time the GPU step (gpu_shader.physics) for --gpu-counts")
+    parser.add_argument("--gpu-counts", type=int, nargs="+", default=[100, 1000])
     args = parser.parse_args(argv)
     print(f"`python benchmarks/bench_physics.py {' '.join(sys.argv[1:])}`".replace(" `", "`"))
     print(f"\nSpheres in a box, dt = 1/240 s, float64; {cpu_name()}, "
@@ -84,7 +91,29 @@ def main(argv=None) -> int:
             print(f"| {solver} | {count:,} | {contacts:,} | {steps / wall:.1f} | "
                   f"{1e3 * wall / steps:.2f} | {1e6 * per_sphere_step:.2f} | "
                   f"{per_sphere_step / smallest:.2f} |", flush=True)
+    if args.gpu:
+        time_gpu(args.gpu_counts, args.seconds)
     return 0
+
+
+def time_gpu(counts, seconds: float) -> None:
+    """Rows for the GPU step: the same boxes, float32, steps/s including the final read-back."""
+    from gpu_shader.context import gl_context, renderer_name
+    from gpu_shader.physics import GpuStepper
+    print(f"\nGPU step on {renderer_name(gl_context())} (float32, simultaneous, O(N^2) "
+          "contacts):\n")
+    print("| backend | spheres | steps/s | ms/step |")
+    print("| --- | ---: | ---: | ---: |")
+    for count in counts:
+        world = box_of_spheres(count, "simultaneous").copy(dtype="float32")
+        stepper = GpuStepper(world)
+        stepper(int(round(0.25 / world.dt)))               # the same warm-up as the CPU
+        steps = max(1, int(round(seconds / world.dt)))
+        start = time.perf_counter()
+        stepper(steps)
+        wall = time.perf_counter() - start
+        print(f"| gpu | {count:,} | {steps / wall:.1f} | {1e3 * wall / steps:.2f} |",
+              flush=True)
 
 
 if __name__ == "__main__":

@@ -13,7 +13,19 @@ import numpy as np
 
 from physics.errors import choice, in_range, whole_number
 
-BACKENDS = ("cpu",)
+
+def _cpu_stepper(world):
+    return world.step
+
+
+def _gpu_stepper(world):
+    from gpu_shader.physics import GpuStepper       # imported on use: it needs moderngl
+    return GpuStepper(world)
+
+
+# backend name -> a function of the world returning step(n), which advances the world n steps
+# and leaves its state readable (the GPU stepper reads it back only then).
+BACKENDS = {"cpu": _cpu_stepper, "gpu": _gpu_stepper}
 
 
 @dataclass
@@ -76,8 +88,9 @@ def simulate(world, seconds, record_every: int = 1, backend: str = "cpu") -> Tra
     record_every : int
         Record the state every this many steps; the state before the first step is always
         recorded, and so is the last.
-    backend : {"cpu"}
-        Which implementation steps the world.
+    backend : {"cpu", "gpu"}
+        Which implementation steps the world: "gpu" is gpu_shader.physics, float32 worlds with
+        the simultaneous solver only.
 
     Returns
     -------
@@ -85,14 +98,17 @@ def simulate(world, seconds, record_every: int = 1, backend: str = "cpu") -> Tra
     """
     seconds = in_range(seconds, "seconds", 0)
     record_every = whole_number(record_every, "record_every", 1)
-    choice(backend, "backend", BACKENDS)
+    choice(backend, "backend", list(BACKENDS))
+    step = BACKENDS[backend](world)
     total = int(round(seconds / world.dt))
     first_event = len(world.events)
     records = [_snapshot(world)]
-    for done in range(1, total + 1):
-        world.step()
-        if done % record_every == 0 or done == total:
-            records.append(_snapshot(world))
+    done = 0
+    while done < total:
+        count = min(record_every - done % record_every, total - done)
+        step(count)
+        done += count
+        records.append(_snapshot(world))
     columns = {name: np.array([record[name] for record in records]) for name in records[0]}
     return Trajectory(**columns, events=world.events[first_event:])
 

@@ -1,0 +1,585 @@
+// One step of physics.World with the "simultaneous" (Jacobi) solver, as a compute shader.
+//
+// Loaded by gpu_shader/physics.py, which prepends "#version 430" and the #defines MAX_CONTACTS
+// and MAX_ITERATIONS, and runs the stages below as separate dispatches, in this order:
+//
+//   STAGE_BEGIN                 integrate velocities, find contacts        (World._step 1, 2)
+//   STAGE_COLLIDE_COUNT, _APPLY collision sweep k = 0 .. iterations-1      (_collide_together)
+//   STAGE_WARM_START            last step's resting impulses               (_apply_warm_start)
+//   STAGE_REST                  resting pass k = 0 .. iterations-1         (_rest)
+//   STAGE_POSITIONS             integrate positions, bounce off planes     (World._step 4)
+//   STAGE_FINISH                stop sphere sweeps, push out, bounds       (stop_sphere_sweeps,
+//                                                                           separate_overlaps)
+//
+// One invocation per body, in the gather form: body i walks its own contact list (planes first,
+// then the other spheres by index, the CPU's order) and sums the impulses it receives. A contact
+// between two spheres is computed twice, once by each, from the same numbers in the same
+// canonical orientation (a = lower index, normal from b to a), so both get the same impulse
+// with opposite signs. Contacts are found by brute force, O(N^2) per step: fine for the few
+// hundred spheres a lesson uses; the CPU uses a broad phase (physics/broadphase.py) instead.
+//
+// Jacobi: every pass reads the velocities of slot u_read and writes slot 1 - u_read, so every
+// contact of a pass sees the same velocities. A pass the CPU would not run (its loop stopped
+// early) still copies the velocities through, so the slots stay in step without a read-back.
+
+layout(local_size_x = 64) in;
+
+#define STAGE_BEGIN 0
+#define STAGE_COLLIDE_COUNT 1
+#define STAGE_COLLIDE_APPLY 2
+#define STAGE_WARM_START 3
+#define STAGE_REST 4
+#define STAGE_POSITIONS 5
+#define STAGE_FINISH 6
+
+#define KIND_SPHERE_PLANE 0
+#define KIND_SPHERE_SPHERE 1
+#define KIND_LEFT_BOUNDS 2
+
+#define CCD_PASSES 3              // bounce_off_planes(passes=3)
+#define SETTLED 1e-9              // physics.solvers.SETTLED (m/s)
+
+// counters[]: colliding contacts per sweep, largest change per resting pass (float bits: a
+// non-negative float orders like its bits), events written, contact lists that overflowed.
+#define COUNT_COLLIDING 0
+#define COUNT_CHANGE MAX_ITERATIONS
+#define COUNT_EVENTS (2 * MAX_ITERATIONS)
+#define COUNT_OVERFLOW (2 * MAX_ITERATIONS + 1)
+
+struct Body {
+    vec4 position;          // x_n (m), the state the step starts from and ends in
+    vec4 velocity;          // v_n (m/s)
+    vec4 spin;              // w_n (rad/s)
+    vec4 orientation;       // unit quaternion (w, x, y, z)
+    vec4 start_position;    // copies of x_n, v_n, w_n made by STAGE_BEGIN
+    vec4 start_velocity;
+    vec4 start_spin;
+    vec4 end_position;      // x_{n+1} before the sphere sweep test
+    float radius;
+    float inverse_mass;
+    float inverse_inertia;  // 1 / (2/5 m r^2)
+    float restitution;
+    float friction;
+    int in_world;           // World.active ("active" is a reserved word in GLSL)
+    int start_in_world;     // `moving` in World._step: active when the step began
+    int colliding;          // contacts of this body colliding in the current sweep
+    int contact_count[2];   // length of the contact list of each parity
+    int pad0;
+    int pad1;
+};
+
+struct Motion {             // SolverBodies row: velocity and spin during the solver
+    vec4 velocity;
+    vec4 spin;
+};
+
+struct Contact {            // one entry of a body's contact list (physics.contacts.Contacts)
+    vec4 normal_gap;        // xyz: unit normal from b to a; w: gap (m)
+    vec4 tangent_total;     // xyz: accumulated friction impulse on a (N s); w: unused
+    int other;              // the other sphere's index, or -1 - plane for a plane
+    float normal_total;     // accumulated normal impulse (N s)
+    float gravity_part;     // h n.g for a plane contact, 0 between spheres (m/s)
+    float pad;
+};
+
+struct Plane {
+    vec4 normal_offset;     // plane normal . x = offset
+    float restitution;
+    float friction;
+    float pad0;
+    float pad1;
+};
+
+struct Event {              // physics.events.EVENT_DTYPE, plus the stage that ordered it
+    int step;
+    int stage;
+    int kind;
+    int body;
+    int other;
+    float speed;
+    float impulse;
+    int pad;
+};
+
+layout(std430, binding = 0) buffer Bodies { Body bodies[]; };
+layout(std430, binding = 1) buffer Motions { Motion motion[]; };         // 2 N: two slots
+layout(std430, binding = 2) buffer Contacts { Contact contacts[]; };     // 2 N MAX_CONTACTS
+layout(std430, binding = 3) buffer Planes { Plane planes[]; };
+layout(std430, binding = 4) buffer Counters { uint counters[]; };
+layout(std430, binding = 5) buffer Events { Event events[]; };
+
+uniform int u_stage;
+uniform int u_pass;          // the sweep or resting pass this dispatch runs
+uniform int u_read;          // velocity slot read by this dispatch (0 or 1)
+uniform int u_list;          // contact-list parity of this step (0 or 1)
+uniform int u_step;          // step number once this step is done (World.steps + 1)
+uniform int u_count;         // N spheres
+uniform int u_planes;        // P planes
+uniform int u_integrator;    // 0 explicit, 1 semi_implicit, 2 verlet
+uniform int u_event_capacity;
+uniform int u_has_bounds;
+uniform float u_h;           // dt (s)
+uniform float u_weight;      // c of integrators.py: 0, 1 or 1/2
+uniform float u_threshold;   // restitution threshold (m/s)
+uniform float u_slop;        // m
+uniform float u_push_out;    // fraction of a deep overlap removed per step
+uniform vec3 u_gravity;      // m/s^2
+uniform vec3 u_low;          // bounds (m)
+uniform vec3 u_high;
+
+// --- small helpers -------------------------------------------------------------------------
+
+// dot written out in the CPU's order, (a.x b.x + a.y b.y) + a.z b.z (marchlab.geometry.dot).
+float dot3(vec3 a, vec3 b) { return (a.x * b.x + a.y * b.y) + a.z * b.z; }
+
+// Row-wise cross product p x q (physics.impulses.cross).
+vec3 cross3(vec3 p, vec3 q) {
+    return vec3(p.y * q.z - p.z * q.y, p.z * q.x - p.x * q.z, p.x * q.y - p.y * q.x);
+}
+
+int list_start(int body, int parity) { return (parity * u_count + body) * MAX_CONTACTS; }
+
+void record_event(int stage, int kind, int body, int other, float speed, float impulse) {
+    uint slot = atomicAdd(counters[COUNT_EVENTS], 1u);
+    if (int(slot) < u_event_capacity) {
+        events[slot] = Event(u_step, stage, kind, body, other, speed, impulse, 0);
+    }
+}
+
+// The bodies of a contact of body i in the CPU's orientation: a is the lower index (or the
+// sphere of a plane contact), b the higher (or -1, the static world).
+void contact_bodies(int i, int other, out int a, out int b) {
+    if (other < 0) { a = i; b = -1; }
+    else { a = min(i, other); b = max(i, other); }
+}
+
+vec3 velocity_of(int body) {
+    return body < 0 ? vec3(0.0) : motion[u_read * u_count + body].velocity.xyz;
+}
+vec3 spin_of(int body) { return body < 0 ? vec3(0.0) : motion[u_read * u_count + body].spin.xyz; }
+float radius_of(int body) { return body < 0 ? 0.0 : bodies[body].radius; }
+float inverse_mass_of(int body) { return body < 0 ? 0.0 : bodies[body].inverse_mass; }
+float inverse_inertia_of(int body) { return body < 0 ? 0.0 : bodies[body].inverse_inertia; }
+
+// --- the formulas of physics/impulses.py ---------------------------------------------------
+
+// v_rel of a's contact point relative to b's: v_a - v_b - (r_a w_a + r_b w_b) x n.
+vec3 relative_velocity(int a, int b, vec3 n) {
+    vec3 lever = radius_of(a) * spin_of(a) + radius_of(b) * spin_of(b);
+    return velocity_of(a) - velocity_of(b) - cross3(lever, n);
+}
+
+// k_n = 1/m_a + 1/m_b and k_t = k_n + r_a^2/I_a + r_b^2/I_b, each inverse mass and inertia
+// multiplied by its body's share (mass splitting; solvers._masses).
+vec2 effective_masses(int a, int b, float share_a, float share_b) {
+    float ima = inverse_mass_of(a) * share_a, imb = inverse_mass_of(b) * share_b;
+    float iia = inverse_inertia_of(a) * share_a, iib = inverse_inertia_of(b) * share_b;
+    float ra = radius_of(a), rb = radius_of(b);
+    float k_normal = ima + imb;
+    float k_tangent = k_normal + ra * ra * iia + rb * rb * iib;
+    return vec2(k_normal, k_tangent);
+}
+
+// Coulomb friction: -v_t / k_t, shortened to length `limit` where longer.
+vec3 friction_impulse(vec3 v_tangent, float k_tangent, float limit) {
+    vec3 sticking = -v_tangent / k_tangent;
+    float len = sqrt(dot3(sticking, sticking));
+    float scale = len > limit ? limit / (len > 0.0 ? len : 1.0) : 1.0;
+    return sticking * scale;
+}
+
+// The impulse on a of one collision (impulses.collision_impulse); j and the approach speed
+// (gravity_part - n.v_rel) come back through `out`.
+vec3 collision_impulse(vec3 v_rel, vec3 n, float gravity_part, float restitution,
+                       float friction, vec2 k, float threshold, out float j, out float approach) {
+    float u = dot3(v_rel, n);
+    approach = gravity_part - u;
+    bool colliding = approach > threshold;
+    j = colliding ? (restitution * approach - u) / k.x : 0.0;
+    j = max(j, 0.0);
+    vec3 v_tangent = v_rel - u * n;
+    vec3 tangent = friction_impulse(v_tangent, k.y, friction * j);
+    if (!colliding) tangent = vec3(0.0);
+    return j * n + tangent;
+}
+
+// One resting pass of one contact (impulses.contact_impulse): the accumulated impulses stay
+// in the friction cone; returns the increment to apply to a.
+vec3 contact_impulse(vec3 v_rel, vec3 n, float target, float friction, vec2 k,
+                     inout float normal_total, inout vec3 tangent_total) {
+    float u = dot3(v_rel, n);
+    float new_normal = max(normal_total + (target - u) / k.x, 0.0);
+    vec3 v_tangent = v_rel - u * n;
+    vec3 new_tangent = friction_impulse(v_tangent - tangent_total * k.y, k.y,
+                                        friction * new_normal);
+    vec3 impulse = (new_normal - normal_total) * n + (new_tangent - tangent_total);
+    normal_total = new_normal;
+    tangent_total = new_tangent;
+    return impulse;
+}
+
+// apply_impulse, for one of the two bodies: P to a, -P to b; both spins turn the same way.
+void apply_impulse(int i, int a, vec3 n, vec3 impulse, inout vec3 velocity, inout vec3 spin) {
+    vec3 turn = cross3(n, impulse);
+    Body self = bodies[i];
+    if (i == a) velocity += impulse * self.inverse_mass;
+    else velocity += -impulse * self.inverse_mass;
+    spin += -(self.radius * self.inverse_inertia) * turn;
+}
+
+// Pair coefficients, mixed as Box2D does: max of restitutions, sqrt of the frictions' product.
+vec2 pair_coefficients(int i, int other) {
+    Body self = bodies[i];
+    if (other < 0) {
+        Plane p = planes[-1 - other];
+        return vec2(max(self.restitution, p.restitution), sqrt(self.friction * p.friction));
+    }
+    int a = min(i, other), b = max(i, other);
+    return vec2(max(bodies[a].restitution, bodies[b].restitution),
+                sqrt(bodies[a].friction * bodies[b].friction));
+}
+
+// --- stages --------------------------------------------------------------------------------
+
+// integrators.integrate_velocities and contacts.find_contacts (with World._step's removal of
+// plane contacts still arriving: the continuous test bounces those). Carries last step's
+// accumulated impulses over to contacts that persist (solvers.warm_start).
+void begin_step(int i) {
+    if (i == 0) {
+        for (int c = 0; c <= COUNT_OVERFLOW; c++) {
+            if (c != COUNT_EVENTS && c != COUNT_OVERFLOW) counters[c] = 0u;
+        }
+    }
+    Body self = bodies[i];
+    bodies[i].start_position = self.position;
+    bodies[i].start_velocity = self.velocity;
+    bodies[i].start_spin = self.spin;
+    bodies[i].start_in_world = self.in_world;
+    vec3 v = self.velocity.xyz + (u_h * u_gravity) * float(self.in_world);
+    motion[i] = Motion(vec4(v, 0.0), self.spin);
+
+    int start = list_start(i, u_list), old = list_start(i, 1 - u_list);
+    int old_count = self.contact_count[1 - u_list];
+    int count = 0;
+    if (self.in_world != 0) {
+        vec3 x = self.position.xyz;
+        for (int p = 0; p < u_planes; p++) {
+            vec3 n = planes[p].normal_offset.xyz;
+            float gap = dot3(x, n) - planes[p].normal_offset.w - self.radius;
+            float approach = -dot3(n, self.velocity.xyz);
+            bool arriving = gap >= 0.0 && approach > u_threshold;
+            if (gap <= u_slop && !arriving) {
+                if (count == MAX_CONTACTS) { atomicOr(counters[COUNT_OVERFLOW], 1u); break; }
+                contacts[start + count] = Contact(vec4(n, gap), vec4(0.0), -1 - p, 0.0,
+                                                  u_h * dot3(n, u_gravity), 0.0);
+                count++;
+            }
+        }
+        for (int j = 0; j < u_count; j++) {
+            if (j == i || bodies[j].in_world == 0) continue;
+            int a = min(i, j), b = max(i, j);
+            vec3 d = bodies[a].position.xyz - bodies[b].position.xyz;
+            float distance = sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
+            // coincident centres: the fixed fallback normal +y (contacts.FALLBACK_NORMAL)
+            vec3 n = distance == 0.0 ? vec3(0.0, 1.0, 0.0) : d / distance;
+            float gap = distance - (bodies[a].radius + bodies[b].radius);
+            if (gap <= u_slop) {
+                if (count == MAX_CONTACTS) { atomicOr(counters[COUNT_OVERFLOW], 1u); break; }
+                contacts[start + count] = Contact(vec4(n, gap), vec4(0.0), j, 0.0, 0.0, 0.0);
+                count++;
+            }
+        }
+    }
+    // warm_start: the same pair in last step's list hands over its accumulated impulses
+    for (int c = 0; c < count; c++) {
+        for (int o = 0; o < old_count; o++) {
+            if (contacts[old + o].other == contacts[start + c].other) {
+                contacts[start + c].normal_total = contacts[old + o].normal_total;
+                contacts[start + c].tangent_total = contacts[old + o].tangent_total;
+                break;
+            }
+        }
+    }
+    bodies[i].contact_count[u_list] = count;
+}
+
+// The first half of solvers._collide_together: how many of this body's contacts collide in
+// sweep u_pass (its mass is split among them), and whether anything collides at all.
+void collide_count(int i) {
+    if (u_pass > 0 && counters[COUNT_COLLIDING + u_pass - 1] == 0u) return;   // loop ended
+    int start = list_start(i, u_list), count = bodies[i].contact_count[u_list];
+    int colliding = 0;
+    for (int c = 0; c < count; c++) {
+        Contact k = contacts[start + c];
+        int a, b;
+        contact_bodies(i, k.other, a, b);
+        vec3 v_rel = relative_velocity(a, b, k.normal_gap.xyz);
+        if (k.gravity_part - dot3(v_rel, k.normal_gap.xyz) > u_threshold) colliding++;
+    }
+    bodies[i].colliding = colliding;
+    if (colliding > 0) atomicAdd(counters[COUNT_COLLIDING + u_pass], uint(colliding));
+}
+
+// The second half (solvers._collide): collision impulses with mass split among the colliding
+// contacts. Body i sums first the contacts where it is a, then those where it is b, the order
+// in which np.add.at adds them on the CPU.
+void collide_apply(int i) {
+    vec3 v = velocity_of(i), w = spin_of(i);
+    if (counters[COUNT_COLLIDING + u_pass] != 0u) {
+        int start = list_start(i, u_list), count = bodies[i].contact_count[u_list];
+        for (int side = 0; side < 2; side++) {
+            for (int c = 0; c < count; c++) {
+                Contact k = contacts[start + c];
+                int a, b;
+                contact_bodies(i, k.other, a, b);
+                if ((side == 0) != (i == a)) continue;
+                vec3 n = k.normal_gap.xyz;
+                vec3 v_rel = relative_velocity(a, b, n);
+                if (k.gravity_part - dot3(v_rel, n) <= u_threshold) continue;
+                float share_b = b < 0 ? 1.0 : float(bodies[b].colliding);
+                vec2 mass = effective_masses(a, b, float(bodies[a].colliding), share_b);
+                vec2 mix = pair_coefficients(i, k.other);
+                float j, approach;
+                vec3 impulse = collision_impulse(v_rel, n, k.gravity_part, mix.x, mix.y, mass,
+                                                 u_threshold, j, approach);
+                if (!(j > 0.0)) continue;
+                apply_impulse(i, a, n, impulse, v, w);
+                if (i == a) {
+                    record_event(u_pass, k.other < 0 ? KIND_SPHERE_PLANE : KIND_SPHERE_SPHERE,
+                                 a, k.other < 0 ? -1 - k.other : b, approach, j);
+                }
+            }
+        }
+    }
+    motion[(1 - u_read) * u_count + i] = Motion(vec4(v, 0.0), vec4(w, 0.0));
+}
+
+// solvers._apply_warm_start: last step's resting impulses, friction turned into the current
+// tangent plane.
+void warm_start_apply(int i) {
+    vec3 v = velocity_of(i), w = spin_of(i);
+    int start = list_start(i, u_list), count = bodies[i].contact_count[u_list];
+    for (int side = 0; side < 2; side++) {
+        for (int c = 0; c < count; c++) {
+            Contact k = contacts[start + c];
+            int a, b;
+            contact_bodies(i, k.other, a, b);
+            if ((side == 0) != (i == a)) continue;
+            vec3 n = k.normal_gap.xyz;
+            vec3 tangent = k.tangent_total.xyz - dot3(k.tangent_total.xyz, n) * n;
+            contacts[start + c].tangent_total.xyz = tangent;
+            apply_impulse(i, a, n, k.normal_total * n + tangent, v, w);
+        }
+    }
+    motion[(1 - u_read) * u_count + i] = Motion(vec4(v, 0.0), vec4(w, 0.0));
+}
+
+// solvers._rest over every contact, mass split among all of a body's contacts; stops (copies
+// through) once the previous pass changed no velocity by more than SETTLED.
+void rest_pass(int i) {
+    vec3 v = velocity_of(i), w = spin_of(i);
+    bool running = u_pass == 0
+        || uintBitsToFloat(counters[COUNT_CHANGE + u_pass - 1]) >= SETTLED;
+    if (running) {
+        int start = list_start(i, u_list), count = bodies[i].contact_count[u_list];
+        float change = 0.0;
+        for (int side = 0; side < 2; side++) {
+            for (int c = 0; c < count; c++) {
+                Contact k = contacts[start + c];
+                int a, b;
+                contact_bodies(i, k.other, a, b);
+                if ((side == 0) != (i == a)) continue;
+                vec3 n = k.normal_gap.xyz;
+                vec3 v_rel = relative_velocity(a, b, n);
+                float share_b = b < 0 ? 1.0 : float(bodies[b].contact_count[u_list]);
+                vec2 mass = effective_masses(a, b, float(bodies[a].contact_count[u_list]),
+                                             share_b);
+                float target = -max(k.normal_gap.w, 0.0) / u_h;     // solvers._resting_target
+                float normal_total = k.normal_total;
+                vec3 tangent_total = k.tangent_total.xyz;
+                vec3 impulse = contact_impulse(v_rel, n, target, pair_coefficients(i, k.other).y,
+                                               mass, normal_total, tangent_total);
+                contacts[start + c].normal_total = normal_total;
+                contacts[start + c].tangent_total.xyz = tangent_total;
+                apply_impulse(i, a, n, impulse, v, w);
+                change = max(change, sqrt(dot3(impulse, impulse)) * mass.y);
+            }
+        }
+        atomicMax(counters[COUNT_CHANGE + u_pass], floatBitsToUint(change));
+    }
+    motion[(1 - u_read) * u_count + i] = Motion(vec4(v, 0.0), vec4(w, 0.0));
+}
+
+// integrators.py: x_{n+1} from x_n, v_n and v_{n+1}, each scheme written as on the CPU.
+vec3 integrate_position(vec3 x, vec3 v_old, vec3 v_new) {
+    if (u_integrator == 0) return x + u_h * v_old;                  // explicit_euler
+    if (u_integrator == 1) return x + u_h * v_new;                  // semi_implicit_euler
+    return x + u_h * (0.5 * (v_old + v_new));                       // velocity_verlet
+}
+
+// quaternions.quaternion_multiply: the Hamilton product p q.
+vec4 quaternion_multiply(vec4 p, vec4 q) {
+    return vec4(p.x * q.x - p.y * q.y - p.z * q.z - p.w * q.w,
+                p.x * q.y + p.y * q.x + p.z * q.w - p.w * q.z,
+                p.x * q.z - p.y * q.w + p.z * q.x + p.w * q.y,
+                p.x * q.w + p.y * q.z - p.z * q.y + p.w * q.x);
+}
+
+// quaternions.rotate_orientations: turn q by the world-frame rotation vector r, renormalised.
+vec4 rotate_orientation(vec4 q, vec3 r) {
+    float angle = sqrt(r.x * r.x + r.y * r.y + r.z * r.z);
+    float half_sinc = angle > 0.0 ? sin(0.5 * angle) / angle : 0.5;    // sin(angle/2) / angle
+    vec4 turned = quaternion_multiply(vec4(cos(0.5 * angle), half_sinc * r), q);
+    return turned / sqrt(dot(turned, turned));
+}
+
+// continuous.first_plane_hit: first t in (0, duration] with gap + speed t + a t^2/2 = 0, or -1.
+float first_plane_hit(float gap, float speed, float acceleration, float duration) {
+    float discriminant = speed * speed - 2.0 * acceleration * gap;
+    float denominator = -speed + sqrt(max(discriminant, 0.0));
+    if (!(discriminant >= 0.0 && denominator > 0.0)) return -1.0;
+    float t = 2.0 * gap / denominator;
+    return t <= duration ? t : -1.0;
+}
+
+// The positions stage of World._step, then continuous.bounce_off_planes for this body: follow
+// its parabola over the step and bounce off the first plane it would cross (up to 3 times).
+void integrate_positions(int i) {
+    Body self = bodies[i];
+    vec3 x_old = self.start_position.xyz, v_old = self.start_velocity.xyz;
+    vec3 v_new = velocity_of(i), spin = spin_of(i);
+    vec3 x_new = integrate_position(x_old, v_old, v_new);
+    vec3 turn = integrate_position(vec3(0.0), self.start_spin.xyz, spin);
+    bodies[i].orientation = rotate_orientation(self.orientation, turn);
+
+    // Planes the solver already handled this step are skipped (bit p of `skip`).
+    uint skip = 0u;
+    int start = list_start(i, u_list), count = self.contact_count[u_list];
+    for (int c = 0; c < count; c++) {
+        int other = contacts[start + c].other;
+        if (other < 0) skip |= 1u << uint(-1 - other);
+    }
+    vec3 acceleration = (v_new - v_old) / u_h;
+    vec3 position = x_old, velocity = v_old + (u_weight - 0.5) * (v_new - v_old);
+    float elapsed = 0.0;
+    bool bounced = false;
+    for (int pass = 0; pass < CCD_PASSES && self.start_in_world != 0; pass++) {
+        int plane = -1;
+        float first = 0.0;
+        for (int p = 0; p < u_planes; p++) {
+            vec3 n = planes[p].normal_offset.xyz;
+            float gap = dot3(position, n) - planes[p].normal_offset.w - self.radius;
+            if ((skip & (1u << uint(p))) != 0u || gap < 0.0) continue;
+            float t = first_plane_hit(max(gap, 0.0), dot3(velocity, n), dot3(acceleration, n),
+                                      u_h - elapsed);
+            if (t >= 0.0 && (plane < 0 || t < first)) { plane = p; first = t; }
+        }
+        if (plane < 0) break;
+        float t = first;
+        position += t * velocity + (0.5 * t * t) * acceleration;
+        velocity += t * acceleration;
+        elapsed += t;
+        // continuous._impact: a collision impulse, inelastic below the restitution threshold
+        vec3 n = planes[plane].normal_offset.xyz;
+        vec3 v_rel = velocity - cross3(self.radius * spin, n);
+        float approach = -dot3(v_rel, n);
+        float restitution = approach > u_threshold
+            ? max(self.restitution, planes[plane].restitution) : 0.0;
+        float friction = sqrt(self.friction * planes[plane].friction);
+        float k_normal = self.inverse_mass + 0.0;
+        vec2 k = vec2(k_normal, k_normal + self.radius * self.radius * self.inverse_inertia);
+        float j;
+        vec3 impulse = collision_impulse(v_rel, n, 0.0, restitution, friction, k, 0.0, j,
+                                         approach);
+        velocity += impulse * self.inverse_mass;
+        spin -= (self.radius * self.inverse_inertia) * cross3(n, impulse);
+        record_event(100 + pass, KIND_SPHERE_PLANE, i, plane, approach, j);
+        // Landed: it would fall back through before the step ends, so the plane holds it.
+        float left = u_h - elapsed;
+        float u_n = dot3(velocity, n), a_n = dot3(acceleration, n);
+        if (u_n * left + 0.5 * a_n * left * left <= 0.0) {
+            velocity -= u_n * n;
+            acceleration -= min(a_n, 0.0) * n;
+        }
+        skip |= 1u << uint(plane);
+        bounced = true;
+    }
+    if (bounced) {
+        float left = u_h - elapsed;
+        x_new = position + left * velocity + (0.5 * left * left) * acceleration;
+        vec3 end_velocity = velocity + left * acceleration;
+        v_new = end_velocity - ((u_weight - 0.5) * u_h) * acceleration;
+    }
+    bodies[i].end_position = vec4(x_new, 0.0);
+    bodies[i].velocity = vec4(v_new, 0.0);
+    bodies[i].spin = vec4(spin, 0.0);
+}
+
+// continuous.stop_sphere_sweeps (every pair, no broad phase), solvers.separate_overlaps and
+// World._remove_out_of_bounds, for body i.
+void finish_step(int i) {
+    Body self = bodies[i];
+    vec3 start = self.start_position.xyz, end = self.end_position.xyz;
+    if (self.start_in_world != 0) {
+        float first = -1.0;
+        vec3 d_i = end - start;
+        for (int j = 0; j < u_count; j++) {
+            if (j == i || bodies[j].start_in_world == 0) continue;
+            int a = min(i, j), b = max(i, j);
+            vec3 sa = bodies[a].start_position.xyz, sb = bodies[b].start_position.xyz;
+            vec3 p = sa - sb;
+            vec3 q = (bodies[a].end_position.xyz - sa) - (bodies[b].end_position.xyz - sb);
+            float reach = bodies[a].radius + bodies[b].radius;
+            // |p + t q|^2 = R^2: the first root, as c / (-b + sqrt(b^2 - a c))
+            float qa = dot3(q, q), qb = dot3(p, q), qc = dot3(p, p) - reach * reach;
+            float discriminant = qb * qb - qa * qc;
+            float denominator = -qb + sqrt(max(discriminant, 0.0));
+            bool separate = sqrt(max(qc + reach * reach, 0.0)) - reach > u_slop;
+            if (!(separate && qb < 0.0 && discriminant >= 0.0 && denominator > 0.0)) continue;
+            float t = qc / denominator;
+            if (t < 1.0 && (first < 0.0 || t < first)) first = t;
+        }
+        if (first >= 0.0) end = start + first * d_i;
+    }
+
+    // separate_overlaps: contacts deeper than slop, shared by inverse mass, mean of requests
+    vec3 total = vec3(0.0);
+    int deep = 0;
+    int list = list_start(i, u_list), count = self.contact_count[u_list];
+    for (int side = 0; side < 2; side++) {
+        for (int c = 0; c < count; c++) {
+            Contact k = contacts[list + c];
+            int a, b;
+            contact_bodies(i, k.other, a, b);
+            if ((side == 0) != (i == a) || !(k.normal_gap.w < -u_slop)) continue;
+            float ima = inverse_mass_of(a), imb = inverse_mass_of(b);
+            float depth = u_push_out * (-k.normal_gap.w - u_slop) / (ima + imb);
+            vec3 push = depth * k.normal_gap.xyz;
+            total += i == a ? push * ima : -push * imb;
+            deep++;
+        }
+    }
+    end += total / float(max(deep, 1));
+
+    bodies[i].position = vec4(end, 0.0);
+    bool outside = any(lessThan(end, u_low)) || any(greaterThan(end, u_high));
+    if (u_has_bounds != 0 && self.in_world != 0 && outside) {
+        vec3 v = bodies[i].velocity.xyz;
+        record_event(200, KIND_LEFT_BOUNDS, i, -1, sqrt(dot3(v, v)), 0.0);
+        bodies[i].in_world = 0;
+        bodies[i].velocity = vec4(0.0);
+        bodies[i].spin = vec4(0.0);
+    }
+}
+
+void main() {
+    int i = int(gl_GlobalInvocationID.x);
+    if (i >= u_count) return;
+    if (u_stage == STAGE_BEGIN) begin_step(i);
+    else if (u_stage == STAGE_COLLIDE_COUNT) collide_count(i);
+    else if (u_stage == STAGE_COLLIDE_APPLY) collide_apply(i);
+    else if (u_stage == STAGE_WARM_START) warm_start_apply(i);
+    else if (u_stage == STAGE_REST) rest_pass(i);
+    else if (u_stage == STAGE_POSITIONS) integrate_positions(i);
+    else if (u_stage == STAGE_FINISH) finish_step(i);
+}
