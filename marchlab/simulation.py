@@ -79,19 +79,14 @@ def build_world(scene: Scene, dtype=np.float64) -> physics.World:
         if mass is None and density is None:
             density = settings.density
         try:
-            with np.errstate(over="ignore", divide="ignore"):   # checked just below
-                added = world.add_sphere(body.position, velocity=body.velocity,
-                                         radius=body.radius, mass=mass, density=density,
-                                         restitution=_either(body.restitution,
-                                                             settings.restitution),
-                                         friction=_either(body.friction, settings.friction),
-                                         angular_velocity=body.angular_velocity)
-                mass, inverse_inertia = world.mass[added], world.inverse_inertia[added]
-            # The impulses divide by m and by I = 2/5 m r^2: both must be finite and non-zero.
-            if not (np.isfinite(mass) and np.isfinite(inverse_inertia)):
-                raise PhysicsError(f"mass ({float(mass):.6g} kg) and moment of inertia "
-                                   f"(1/I = {float(inverse_inertia):.6g}) must be finite and "
-                                   "non-zero")
+            # physics refuses a mass or moment of inertia that is not finite (with its
+            # inverse) in the world's precision; the error is named by the body here.
+            with np.errstate(over="ignore", divide="ignore"):
+                world.add_sphere(body.position, velocity=body.velocity, radius=body.radius,
+                                 mass=mass, density=density,
+                                 restitution=_either(body.restitution, settings.restitution),
+                                 friction=_either(body.friction, settings.friction),
+                                 angular_velocity=body.angular_velocity)
         except PhysicsError as err:
             raise SceneError(str(err), ("bodies", index)) from None
     for normal, offset in static_planes(scene):

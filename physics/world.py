@@ -126,10 +126,22 @@ class World:
         radius = column(radius, "radius", m, positive)
         if mass is not None and density is not None:
             raise PhysicsError("give mass or density, not both")
-        if density is not None:
-            mass = 4 / 3 * np.pi * radius ** 3 * column(density, "density", m, positive)
-        else:
-            mass = column(1.0 if mass is None else mass, "mass", m, positive)
+        with np.errstate(over="ignore", under="ignore"):      # checked just below
+            if density is not None:
+                mass = 4 / 3 * np.pi * radius ** 3 * column(density, "density", m, positive)
+            else:
+                mass = column(1.0 if mass is None else mass, "mass", m, positive)
+            inertia = 0.4 * mass * radius * radius
+        # The solver divides by m and by I = 2/5 m r^2 in the world's precision: both, and
+        # their inverses, must be finite there (a 1e200 m sphere is not, even in float64).
+        with np.errstate(over="ignore", divide="ignore", under="ignore"):
+            finite = np.isfinite(np.concatenate([mass, inertia, 1 / mass, 1 / inertia])
+                                 .astype(self.dtype))
+        if not finite.all():
+            raise PhysicsError(f"mass {float(np.max(mass)):.3g} kg with radius "
+                               f"{float(np.max(radius)):.3g} m is out of range for "
+                               f"{np.dtype(self.dtype).name}: the mass, the moment of inertia "
+                               "and their inverses must be finite")
         restitution = column(restitution, "restitution", m, lambda v, n: in_range(v, n, 0, 1))
         friction = column(friction, "friction", m, lambda v, n: in_range(v, n, 0))
 

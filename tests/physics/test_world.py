@@ -213,3 +213,13 @@ def test_float32_single_bounce_tracks_float64_within_1e_4_m():
         world.add_sphere((0, 1.1, 0), velocity=(0.5, 0, 0), radius=RADIUS, restitution=0.6)
         return physics.simulate(world, 2.0).positions
     assert np.abs(bounce(np.float32) - bounce(np.float64)).max() <= 1e-4
+
+
+@pytest.mark.parametrize("radius, mass", [(1e200, None), (1e-200, None), (1.0, 1e-320)])
+def test_a_mass_or_inertia_beyond_the_precision_is_refused_in_one_line(radius, mass):
+    """m, I = 2/5 m r^2 and their inverses must be finite, or the solver makes NaNs."""
+    world = physics.World()
+    with pytest.raises(physics.PhysicsError) as caught:
+        world.add_sphere((0, 0, 0), radius=radius, mass=mass, density=None if mass else 1000.0)
+    assert "out of range" in str(caught.value) and "\n" not in str(caught.value)
+    assert world.count == 0
