@@ -38,12 +38,14 @@ def test_backend_matches_reference_within_gates(backend, name, scene, size,
     c = compare_frames(reference, candidate, epsilon=scene.render.epsilon)
     TRENDS.append((name, backend, reference_precision, c.psnr, c.ssim))
     failed = failures(c, gates_against(reference_precision))
-    if failed:
+    message = ""
+    if failed:                      # write the evidence before the assertion reports it
         written = write_difference_images(reference, candidate, c, tmp_path)
         table = "\n".join(f"  {k} = {v}" for k, v in c.rows())
-        pytest.fail(f"{name}: {backend} float32 vs numpy {reference_precision}:\n"
-                    + "\n".join(failed) + f"\n{table}\nimages: "
-                    + ", ".join(str(p) for p in written))
+        message = (f"{name}: {backend} float32 vs numpy {reference_precision}:\n"
+                   + "\n".join(failed) + f"\n{table}\nimages: "
+                   + ", ".join(str(p) for p in written))
+    assert failed == [], message
 
 
 @pytest.mark.parametrize("name, scene, size", CASES[:1], ids=[CASES[0][0]])
