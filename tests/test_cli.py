@@ -9,9 +9,6 @@ from __future__ import annotations
 
 import dataclasses
 import os
-import shutil
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -20,30 +17,17 @@ from PIL import Image
 
 import marchlab
 from marchlab import Frame, load_scene
-from marchlab.cli import main
 from marchlab.files import write_atomically
+
+from cli_helpers import assert_one_line_error, leftovers, run_cli, run_marchlab
 
 WIDTH, HEIGHT = 32, 24
 SIZE = f"{WIDTH}x{HEIGHT}"
 BUFFERS = ("hit", "depth", "normal", "steps", "object_id", "color")
 
 
-def run_cli(capsys, *argv) -> tuple[int, str, str]:
-    """``marchlab ARGV`` in-process: (exit code, stdout, stderr)."""
-    try:
-        code = main([str(a) for a in argv])
-    except SystemExit as exit_:                     # argparse exits on a usage error
-        code = exit_.code
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
-def run_marchlab(*argv, cwd) -> subprocess.CompletedProcess:
-    """The real ``marchlab`` command in a subprocess (the console script if installed)."""
-    script = shutil.which("marchlab", path=str(Path(sys.executable).parent))
-    command = [script] if script else [sys.executable, "-m", "marchlab.cli"]
-    return subprocess.run(command + [str(a) for a in argv], cwd=cwd, capture_output=True,
-                          text=True, timeout=120)
 
 
 def png_pixels(path) -> np.ndarray:
@@ -52,15 +36,8 @@ def png_pixels(path) -> np.ndarray:
         return np.asarray(image)
 
 
-def leftovers(folder: Path) -> list[str]:
-    """Temporary files a writer left behind (write_atomically names them .NAME.*.tmp)."""
-    return sorted(p.name for p in folder.iterdir() if p.name.endswith(".tmp"))
 
 
-def assert_one_line_error(code: int, err: str) -> None:
-    assert code == 2
-    assert err.endswith("\n") and err.count("\n") == 1, err
-    assert "Traceback" not in err
 
 
 @pytest.fixture(scope="module")

@@ -17,7 +17,7 @@ from PIL import Image, ImageSequence
 from marchlab.animation import gif_durations
 from marchlab.render import backend_problem
 
-from test_cli import assert_one_line_error, leftovers, run_cli, run_marchlab
+from cli_helpers import assert_one_line_error, leftovers, run_cli, run_marchlab
 
 SIZE = "32x24"
 QUICK = ("--seconds", "0.5", "--fps", "10", "--size", SIZE)       # 5 frames, t = 0 to 0.4 s

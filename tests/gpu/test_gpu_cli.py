@@ -16,26 +16,15 @@ from PIL import Image
 
 import marchlab
 from marchlab.builder import Camera, Scene, sphere
-from marchlab.cli import main
 from marchlab.compare import Gates, compare_frames, failures, gates_against
+
+from cli_helpers import assert_one_line_error, run_cli
 
 SIZE = "48x36"
 
 
-def run_cli(capsys, *argv) -> tuple[int, str, str]:
-    """``marchlab ARGV`` in-process: (exit code, stdout, stderr)."""
-    try:
-        code = main([str(a) for a in argv])
-    except SystemExit as exit_:                     # argparse exits on a usage error
-        code = exit_.code
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
-def assert_one_line_error(code, err):
-    assert code == 2
-    assert err.count("\n") == 1 and err.startswith("marchlab")
-    assert "Traceback" not in err
 
 
 # --- marchlab shader ---------------------------------------------------------------------
