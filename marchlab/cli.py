@@ -228,7 +228,8 @@ def cmd_compare(args) -> int:
     a = render(scene, width, height, backend=args.a, precision=a_precision)
     b = render(scene, width, height, backend=args.b, precision=b_precision)
     c = compare_frames(a, b, epsilon=scene.render.epsilon)
-    failed = failures(c, gates_against(a.precision))
+    gates = gates_against(a.precision)
+    failed = failures(c, gates)
     print(f"{args.scene}: {args.b} {b.precision} against {args.a} {a.precision}, "
           f"{width}x{height}")
     rows = c.rows()
@@ -236,7 +237,7 @@ def cmd_compare(args) -> int:
     for name, value in rows:
         print(f"  {name:<{name_width}}  {value}")
     if args.save:
-        for path in write_difference_images(a, b, c, Path(args.save)):
+        for path in write_difference_images(a, b, gates, Path(args.save)):
             print(f"wrote {path}")
     for line in failed:
         print(f"FAIL {line}")

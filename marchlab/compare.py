@@ -118,15 +118,9 @@ def compare_frames(a: Frame, b: Frame, erode: int = 2, epsilon: float | None = N
     """
     if a.color.shape != b.color.shape:
         raise ValueError(f"frames differ in size: {a.color.shape[:2]} and {b.color.shape[:2]}")
-    differs = a.hit != b.hit
-    excused = differs & dilate(boundary(a.hit), 1)
+    differs, excused, path_differs, near_jump = disagreements(a, b)
     both = a.hit & b.hit
     interior = both & ~dilate(edges(a) | edges(b), erode)
-    if a.path is not None and b.path is not None:
-        path_differs = both & (a.path != b.path)
-        near_jump = dilate(boundary(a.path.astype(np.int64)), 1)
-    else:
-        path_differs = near_jump = np.zeros_like(both)
     smooth = interior & ~path_differs
 
     ta, tb = a.depth[interior].astype(np.float64), b.depth[interior].astype(np.float64)
@@ -201,18 +195,34 @@ def dilate(mask: np.ndarray, radius: int) -> np.ndarray:
     return out
 
 
-def error_mask(a: Frame, b: Frame) -> np.ndarray:
-    """Pixels (H, W) where ``b`` is off by more than the float32 gates, outside excused ones."""
-    gates = Gates()
+def disagreements(a: Frame, b: Frame):
+    """Where ``b`` saw something else than the reference ``a``, as four (H, W) bool masks.
+
+    Returns ``(hit_differs, hit_excused, path_differs, near_jump)``: hit flags that differ,
+    those of them within 1 px of a's silhouette, pixels hit in both whose path labels differ
+    (all False unless both frames have labels), and pixels within 1 px of a jump in a's label.
+    """
     differs = a.hit != b.hit
     excused = differs & dilate(boundary(a.hit), 1)
-    color = np.abs(a.color.astype(np.float64) - b.color).max(axis=-1) > gates.color
+    both = a.hit & b.hit
     if a.path is not None and b.path is not None:
-        excused |= a.hit & b.hit & (a.path != b.path)
-    return (differs | color) & ~excused
+        path_differs = both & (a.path != b.path)
+        near_jump = dilate(boundary(a.path.astype(np.int64)), 1)
+    else:
+        path_differs = near_jump = np.zeros_like(both)
+    return differs, excused, path_differs, near_jump
 
 
-def write_difference_images(a: Frame, b: Frame, c: Comparison, directory) -> list:
+def error_mask(a: Frame, b: Frame, gates: Gates) -> np.ndarray:
+    """Pixels (H, W) the gates do not excuse: a hit flag or path label that differs away from
+    an edge of the reference, or a colour off by more than ``gates.color`` elsewhere."""
+    differs, excused, path_differs, near_jump = disagreements(a, b)
+    color = np.abs(a.color.astype(np.float64) - b.color).max(axis=-1) > gates.color
+    return ((differs & ~excused) | (path_differs & ~near_jump)
+            | (color & ~excused & ~path_differs))
+
+
+def write_difference_images(a: Frame, b: Frame, gates: Gates, directory) -> list:
     """Write a.png, b.png, the difference amplified x16 and the error mask; return the paths."""
     from PIL import Image                      # only when images are asked for
     directory = Path(directory)
@@ -222,7 +232,7 @@ def write_difference_images(a: Frame, b: Frame, c: Comparison, directory) -> lis
         f"a-{a.backend}-{a.precision}.png": a.image(),
         f"b-{b.backend}-{b.precision}.png": b.image(),
         "difference-x16.png": np.floor(diff * 255 + 0.5).astype(np.uint8),
-        "error-mask.png": np.repeat(error_mask(a, b)[..., None] * np.uint8(255), 3, axis=-1),
+        "error-mask.png": np.repeat(error_mask(a, b, gates)[..., None] * np.uint8(255), 3, axis=-1),
     }
     paths = []
     for name, pixels in images.items():

@@ -37,10 +37,11 @@ def test_backend_matches_reference_within_gates(backend, name, scene, size,
     candidate = render(scene, width, height, backend=backend, precision="float32")
     c = compare_frames(reference, candidate, epsilon=scene.render.epsilon)
     TRENDS.append((name, backend, reference_precision, c.psnr, c.ssim))
-    failed = failures(c, gates_against(reference_precision))
+    gates = gates_against(reference_precision)
+    failed = failures(c, gates)
     message = ""
     if failed:                      # write the evidence before the assertion reports it
-        written = write_difference_images(reference, candidate, c, tmp_path)
+        written = write_difference_images(reference, candidate, gates, tmp_path)
         table = "\n".join(f"  {k} = {v}" for k, v in c.rows())
         message = (f"{name}: {backend} float32 vs numpy {reference_precision}:\n"
                    + "\n".join(failed) + f"\n{table}\nimages: "
