@@ -204,9 +204,8 @@ class Tracer:
         ids = surface.object_id
         checkered = self.has_checker[ids]
         if checkered.any():
-            scale = self.checker_scale[ids[checkered]]
-            p = surface.position[checkered]
-            parity[checkered] = (np.floor(p[:, 0] / scale) + np.floor(p[:, 2] / scale)) % 2
+            parity[checkered] = shading.checker_parity(surface.position[checkered],
+                                                       self.checker_scale[ids[checkered]])
         return parity
 
     def light_arriving(self, light, surface):

@@ -118,10 +118,14 @@ def shade_steps(steps, max_steps):
     return heat(steps / max_steps)
 
 
+def checker_parity(p, scale):
+    """0 where floor(x/s) + floor(z/s) is even, 1 where it is odd (N,)."""
+    return (np.floor(p[:, 0] / scale) + np.floor(p[:, 2] / scale)) % 2
+
+
 def checker(p, color_a, color_b, scale):
     """Checkerboard in the xz-plane: color_a where floor(x/s) + floor(z/s) is even."""
-    parity = (np.floor(p[:, 0] / scale) + np.floor(p[:, 2] / scale)) % 2
-    return np.where(parity[:, None] == 0, color_a, color_b)
+    return np.where(checker_parity(p, scale)[:, None] == 0, color_a, color_b)
 
 
 def apply_fog(color, t, fog_color, density):
