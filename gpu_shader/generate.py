@@ -191,7 +191,7 @@ class _Generator:
                 c = m.checker
                 self.block.row([*c.color_a, c.scale] if c else [0, 0, 0, 1])
                 self.block.row([*c.color_b, 1.0] if c else [0, 0, 0, 0])
-        lines = [f"// Row 0: (color, ka); row 1: (kd, ks, shininess, kr)"
+        lines = ["// Row 0: (color, ka); row 1: (kd, ks, shininess, kr)"
                  + ("; row 2: (checker color_a, scale);\n// row 3: (checker color_b, 1 if checkered)."
                     if self.checker else "."),
                  f"#define MATERIAL(id, row) U[{first} + {stride} * (id) + (row)]", ""]

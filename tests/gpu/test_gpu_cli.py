@@ -50,7 +50,7 @@ def test_numbered_shader_prefixes_consecutive_line_numbers(capsys):
     assert code == 0
     lines = numbered.splitlines()
     width = len(str(len(lines)))
-    parsed = [re.fullmatch(rf"\s*(\d+)  (.*)", line) for line in lines]
+    parsed = [re.fullmatch(r"\s*(\d+)  (.*)", line) for line in lines]
     assert all(parsed)
     assert [int(m.group(1)) for m in parsed] == list(range(1, len(lines) + 1))
     assert all(len(line) >= width + 2 for line in lines)
