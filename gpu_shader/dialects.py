@@ -99,6 +99,8 @@ GLSL = Dialect(
 #define precise
 #endif
 #define real float
+// The depth of a miss, as in the reference; GLSL has no literal for it.
+#define INFINITY uintBitsToFloat(0x7F800000u)
 """,
     struct=_glsl_struct,
     to_real=lambda expr: f"float({expr})",

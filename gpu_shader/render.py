@@ -93,14 +93,16 @@ class Renderer:
                 fbo.read_into(planes[i], components=4, attachment=i, dtype="f4")
         finally:
             buffer.release()
+        # The shader writes every buffer in its final form (depth inf and object id -1 on a
+        # miss), so the Frame is views of the read-back planes plus three integer casts.
         color_hit, normal_depth, steps_id = planes
-        hit = color_hit[..., 3] > 0.5
         return Frame(color=color_hit[..., :3],
-                     depth=np.where(hit, normal_depth[..., 3], np.float32(np.inf)),
+                     depth=normal_depth[..., 3],
                      normal=normal_depth[..., :3],
                      steps=steps_id[..., 0].astype(np.int32),
-                     object_id=np.where(hit, steps_id[..., 1], -1).astype(np.int32),
-                     hit=hit, gamma=scene.render.gamma, max_steps=scene.render.max_steps,
+                     object_id=steps_id[..., 1].astype(np.int32),
+                     hit=color_hit[..., 3] > 0.5, gamma=scene.render.gamma,
+                     max_steps=scene.render.max_steps,
                      path=steps_id[..., 2].astype(np.uint32),
                      backend="gpu", precision="float32")
 

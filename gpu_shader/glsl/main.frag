@@ -2,7 +2,7 @@
 // marchlab Frame into three RGBA32F render targets in one draw.
 
 layout(location = 0) out vec4 out_color;     // rgb: colour in [0, 1], a: 1 on a hit
-layout(location = 1) out vec4 out_normal;    // xyz: unit normal, w: depth t (-1 on a miss)
+layout(location = 1) out vec4 out_normal;    // xyz: unit normal, w: depth t (inf on a miss)
 layout(location = 2) out vec4 out_steps;     // x: SDF evaluations, y: object id (-1),
                                              // z: path label (24 bits, exact in a float)
 
@@ -27,6 +27,6 @@ void main()
     vec4 color_path = pixel_color(CAMERA_POSITION, direction, h, n, id);
 
     out_color = vec4(clamp(color_path.xyz, 0.0, 1.0), float(h.hit));
-    out_normal = vec4(n, h.t);
+    out_normal = vec4(n, h.hit == 1 ? h.t : INFINITY);
     out_steps = vec4(float(h.steps), float(id), color_path.w, 0.0);
 }
