@@ -7,8 +7,10 @@ PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 
-# Mesa's EGL and software OpenGL (llvmpipe) for the headless GPU backend.
-SYSTEM_PACKAGES := libegl1 libegl-mesa0 libgl1-mesa-dri
+# Mesa's EGL and software OpenGL (llvmpipe) for the headless GPU backend; Debian's PoCL
+# (with the ICD loader) for the OpenCL backend: the PoCL wheel from PyPI cannot build
+# kernels on some CPUs ("unknown target CPU 'generic'"), Debian's can.
+SYSTEM_PACKAGES := libegl1 libegl-mesa0 libgl1-mesa-dri pocl-opencl-icd ocl-icd-libopencl1
 
 .PHONY: demo test system-packages clean
 

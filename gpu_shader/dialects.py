@@ -1,14 +1,18 @@
-"""The small table of what differs between the C-like shading languages marchlab generates.
+"""The small table of what differs between the C-like languages marchlab generates.
 
 The building blocks (``glsl/*.glsl``) and the generated code are written in a common subset:
-types ``real`` and ``vec3``, constructors ``vec3(...)``, no ``out`` parameters, structs only
-declared here. A dialect says how to spell the few things that differ: the prelude that gives
-``real`` and ``vec3`` their meaning, struct declarations, number literals, conversions and the
-parameter array. GLSL is the only dialect so far; OpenCL C is meant to be one more entry.
+types ``real``, ``vec3`` and ``vec4``, constructors ``vec3(...)``, conversions ``uint(...)``,
+no ``out`` parameters, structs only declared here, ``abs``/``min``/``max``/``clamp``/``floor``/
+``reflect`` and the other functions both languages know. A dialect says how to spell the few
+things that differ: the prelude that gives the types and functions their meaning, struct
+declarations, number literals, conversions, how the program receives its parameters and
+which entry point file ends it. Two dialects: GLSL (the gpu backend) and OpenCL C (the
+opencl backend, float32 or float64).
 """
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from typing import Callable
 
@@ -31,6 +35,8 @@ class Dialect:
     to_int: Callable[[str], str]                  # real expression -> int
     declare_parameters: Callable[[int, int], str] # how the program receives U and P
     real_dtype: np.dtype                          # precision of `real`
+    entry: str                                    # the entry point file in glsl/
+    finish: Callable[[str], str] = lambda source: source   # last rewrite of the whole text
 
     def literal(self, value: float) -> str:
         """A number literal that reads back as exactly ``value`` rounded to `real`."""
@@ -107,6 +113,110 @@ GLSL = Dialect(
     to_int=lambda expr: f"int({expr})",
     declare_parameters=lambda rows, fixed: _glsl_parameters(rows, fixed),
     real_dtype=np.dtype(np.float32),
+    entry="main.frag",
 )
 
-DIALECTS = {"glsl": GLSL}
+
+# --- OpenCL C ------------------------------------------------------------------------------
+
+def _opencl_struct(name: str, fields) -> str:
+    body = "".join(f"    {type_} {field};\n" for type_, field in fields)
+    return f"typedef struct\n{{\n{body}}} {name};\n"
+
+
+def _opencl_prelude(real: str) -> str:
+    fp64 = "#pragma OPENCL EXTENSION cl_khr_fp64 : enable\n" if real == "double" else ""
+    return f"""\
+// OpenCL C 1.2, generated from the same building blocks as the GLSL shader.
+{fp64}// Never contract a * b + c into one FMA rounding: the reference rounds twice (GLSL marks
+// the expressions where it matters `precise`; here it holds everywhere).
+#pragma OPENCL FP_CONTRACT OFF
+#define precise
+typedef {real} real;
+typedef {real}2 vec2;
+typedef {real}3 vec3;
+typedef {real}4 vec4;
+// GLSL's constructors and conversions, as OpenCL vector literals and casts. A function-like
+// macro only expands before "(", so `vec3 p` still names the type.
+#define vec2(...) ((vec2)(__VA_ARGS__))
+#define vec3(...) ((vec3)(__VA_ARGS__))
+#define vec4(...) ((vec4)(__VA_ARGS__))
+#define uint(x) ((uint)(x))
+#define int(x) ((int)(x))
+// OpenCL's abs is for integers; GLSL's reflect has no OpenCL twin (GLSL spec 8.5).
+#undef abs
+#define abs fabs
+vec3 reflect(vec3 i, vec3 n)
+{{
+    return i - 2.0 * dot(n, i) * n;
+}}
+"""
+
+
+# OpenCL C 1.2 has no program-scope variables but compile-time constants, so the parameters
+# cannot be a global as in GLSL: the kernel receives them as a buffer and passes the pointer
+# on, as a first argument, to every function that reads them (directly or through a callee).
+_OPENCL_PARAMETERS = """\
+// The parameters arrive as the kernel's buffer P and are passed on to every function that
+// reads them (PARAMETERS in its signature): OpenCL C 1.2 has no global variables.
+#define PARAMETERS __global const vec4* restrict P
+#define U P
+"""
+
+_FUNCTION = re.compile(r"^(?!__kernel)(\w+)\s+(\w+)\s*\(([^)]*)\)\s*\n\{\n(.*?)^\}", re.M | re.S)
+_PARAMETER_MACRO = re.compile(r"^#define\s+(\w+)(?:\([^)]*\))?\s+.*\b[PU]\[", re.M)
+
+
+def thread_parameters(source: str) -> str:
+    """Give every function that reads ``P`` or ``U`` (or calls one that does) a first
+    argument ``PARAMETERS``, and pass ``P`` at each call."""
+    macros = set(_PARAMETER_MACRO.findall(source))
+    reads = re.compile(r"\b(?:P|U)\[" + "".join(rf"|\b{m}\b" for m in sorted(macros)))
+    functions = {m.group(2): m.group(4) for m in _FUNCTION.finditer(source)}
+    needs = {name for name, body in functions.items() if reads.search(body)}
+    grew = True
+    while grew:                      # callers of functions that need P need it too
+        calls = re.compile(r"\b(?:" + "|".join(sorted(needs)) + r")\s*\(") if needs else None
+        more = {n for n, body in functions.items() if n not in needs and calls and calls.search(body)}
+        needs |= more
+        grew = bool(more)
+    if not needs:
+        return source
+    call = re.compile(r"\b(" + "|".join(sorted(needs)) + r")\(\s*(\)?)")
+    definition = re.compile(r"^(\w+\s+)(" + "|".join(sorted(needs)) + r")\(P(, |\))", re.M)
+    lines = []
+    for line in source.split("\n"):
+        code, hash_, comment = line.partition("//")
+        code = call.sub(lambda m: f"{m.group(1)}(P{')' if m.group(2) else ', '}", code)
+        lines.append(code + hash_ + comment)
+    return definition.sub(lambda m: f"{m.group(1)}{m.group(2)}(PARAMETERS{m.group(3)}",
+                          "\n".join(lines))
+
+
+def _opencl(real: str, dtype) -> Dialect:
+    return Dialect(
+        name="opencl",
+        prelude=_opencl_prelude(real),
+        struct=_opencl_struct,
+        to_real=lambda expr: f"(real)({expr})",
+        to_int=lambda expr: f"(int)({expr})",
+        declare_parameters=lambda rows, fixed: _OPENCL_PARAMETERS,
+        real_dtype=np.dtype(dtype),
+        entry="main.cl",
+        finish=thread_parameters,
+    )
+
+
+OPENCL = {"float32": _opencl("float", np.float32), "float64": _opencl("double", np.float64)}
+
+DIALECTS = {"glsl": {"float32": GLSL}, "opencl": OPENCL}
+
+
+def dialect(name: str, precision: str = "float32") -> Dialect:
+    """The dialect ``name`` ("glsl" or "opencl") at ``precision`` ("float32", "float64")."""
+    if name not in DIALECTS:
+        raise KeyError(f"unknown shader dialect {name!r} (one of: {', '.join(DIALECTS)})")
+    if precision not in DIALECTS[name]:
+        raise KeyError(f"the {name} dialect has no {precision} version "
+                       f"(one of: {', '.join(DIALECTS[name])})")
+    return DIALECTS[name][precision]

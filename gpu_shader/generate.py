@@ -29,7 +29,8 @@ from marchlab.scene import DirectionalLight, PointLight, Scene, SpotLight
 from marchlab.shapes import primitives
 from reference_cpu.normals import STENCILS
 
-from .dialects import DIALECTS, Dialect
+from .dialects import Dialect
+from .dialects import dialect as get_dialect
 from .library import GLSL_DIR, load_library
 from .parameters import ParameterBlock
 from .sdf_code import scene_sdf_code
@@ -58,11 +59,18 @@ class Program:
     features: tuple[str, ...]
 
 
-def generate(scene: Scene, width: int, height: int, dialect: str = "glsl") -> Program:
-    """Generate the program that renders ``scene`` at ``width`` x ``height``."""
-    if dialect not in DIALECTS:
-        raise MarchlabError(f"unknown shader dialect {dialect!r} (one of: {', '.join(DIALECTS)})")
-    return _Generator(scene, DIALECTS[dialect]).program(width, height)
+def generate(scene: Scene, width: int, height: int, dialect: str = "glsl",
+             precision: str = "float32") -> Program:
+    """Generate the program that renders ``scene`` at ``width`` x ``height``.
+
+    ``dialect`` is "glsl" (a fragment shader) or "opencl" (a kernel); ``precision`` the
+    meaning of ``real`` ("float64" only in OpenCL).
+    """
+    try:
+        language = get_dialect(dialect, precision)
+    except KeyError as err:
+        raise MarchlabError(err.args[0]) from None
+    return _Generator(scene, language).program(width, height)
 
 
 class _Generator:
@@ -95,14 +103,15 @@ class _Generator:
         if self.s.shading in LIT_MODES:
             parts.insert(-1, ("materials, indexed by object id", self.material_code()))
         parts.append(("the per-pixel pipeline (reference_cpu/render.py)", self.pixel_code()))
-        parts.append(("the entry point (glsl/main.frag)", (GLSL_DIR / "main.frag").read_text()))
+        entry = self.d.entry
+        parts.append((f"the entry point (glsl/{entry})", (GLSL_DIR / entry).read_text()))
         rows = max(1, len(self.block.rows))
         head = [self.d.prelude, _banner("parameters: one vec4 row each, set per frame")
                 + self.d.declare_parameters(rows, max(1, fixed))]
         head.append(self.block.defines())
         head.append(self.d.structs())
         body = [_banner(title) + text for title, text in parts if text]
-        source = "\n".join(head + body)
+        source = self.d.finish("\n".join(head + body))
         return Program(source, self.block.values(np.float64), tuple(sorted(self.features)))
 
     # --- parameters that every program has --------------------------------------------------

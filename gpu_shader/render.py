@@ -22,6 +22,7 @@ from marchlab.scene import Scene
 from .context import gl_context, renderer_name
 from .generate import generate
 from .library import GLSL_DIR
+from .planes import frame_from_planes
 
 PROGRAM_CACHE_SIZE = 32
 BANDS = 8               # with a progress callback, draw in this many bands of rows
@@ -93,18 +94,7 @@ class Renderer:
                 fbo.read_into(planes[i], components=4, attachment=i, dtype="f4")
         finally:
             buffer.release()
-        # The shader writes every buffer in its final form (depth inf and object id -1 on a
-        # miss), so the Frame is views of the read-back planes plus three integer casts.
-        color_hit, normal_depth, steps_id = planes
-        return Frame(color=color_hit[..., :3],
-                     depth=normal_depth[..., 3],
-                     normal=normal_depth[..., :3],
-                     steps=steps_id[..., 0].astype(np.int32),
-                     object_id=steps_id[..., 1].astype(np.int32),
-                     hit=color_hit[..., 3] > 0.5, gamma=scene.render.gamma,
-                     max_steps=scene.render.max_steps,
-                     path=steps_id[..., 2].astype(np.uint32),
-                     backend="gpu", precision="float32")
+        return frame_from_planes(planes, scene, "gpu", "float32")
 
     def draw(self, vao, width, height, progress):
         if progress is None:

@@ -102,7 +102,11 @@ def build_parser() -> Parser:
 
     p = sub.add_parser("shader", help="print the shader generated for a scene")
     p.add_argument("scene", help="bundled scene name or a .toml path")
-    p.add_argument("--dialect", default="glsl", help="shading language (default: glsl)")
+    p.add_argument("--dialect", default="glsl", choices=["glsl", "opencl"],
+                   help="glsl (the gpu backend's fragment shader) or opencl (the opencl "
+                        "backend's kernel); default: glsl")
+    p.add_argument("--precision", default="float32", choices=["float32", "float64"],
+                   help="what `real` means (float64: opencl only); default: float32")
     p.add_argument("--numbered", action="store_true",
                    help="number the lines, as compiler messages do")
     p.add_argument("--set", action="extend", nargs="+", default=[], metavar="FIELD=VALUE")
@@ -209,7 +213,8 @@ def cmd_show(args) -> int:
 def cmd_shader(args) -> int:
     scene = load_scene(args.scene, args.set)
     from gpu_shader.generate import generate     # no OpenGL needed to generate
-    source = generate(rendered_scene(scene), 640, 480, dialect=args.dialect).source
+    source = generate(rendered_scene(scene), 640, 480, dialect=args.dialect,
+                      precision=args.precision).source
     if args.numbered:
         lines = source.splitlines()
         width = len(str(len(lines)))

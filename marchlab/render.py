@@ -33,6 +33,8 @@ BACKENDS = {
                      "the NumPy reference sphere tracer (CPU)"),
     "gpu": Backend("gpu_shader.render", ("float32",),
                    "the generated fragment shader, through moderngl and EGL"),
+    "opencl": Backend("reference_cpu.opencl", ("float32", "float64"),
+                      "the same generated code as an OpenCL kernel, on a CPU device (PoCL)"),
 }
 
 PRECISIONS = ("float32", "float64")
@@ -52,9 +54,9 @@ def render(scene: Scene, width: int, height: int, backend: str = "numpy",
     width, height : int
         Image size in pixels.
     backend : str
-        One of `BACKENDS`: ``"numpy"`` (the reference) or ``"gpu"``.
+        One of `BACKENDS`: ``"numpy"`` (the reference), ``"gpu"`` or ``"opencl"``.
     precision : {"float32", "float64"}, optional
-        Default: the backend's own (float64 for numpy, float32 for gpu).
+        Default: the backend's own (float64 for numpy, float32 for gpu and opencl).
     progress : callable, optional
         Called as ``progress(done, total)`` while rendering.
     """

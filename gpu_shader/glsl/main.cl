@@ -1,0 +1,42 @@
+// The OpenCL kernel's entry point: one work-item per pixel, the twin of main.frag. It writes
+// the same three planes of 4 values per pixel that the GLSL shader writes into its render
+// targets, so both backends build their Frame the same way (gpu_shader/planes.py).
+//
+//   color_hit:    rgb colour in [0, 1], 1 on a hit
+//   normal_depth: unit normal, depth t (inf on a miss)
+//   steps_id:     SDF evaluations, object id (-1 on a miss), path label (24 bits)
+//
+// The calls below are written as in GLSL; generating the program passes the parameter buffer
+// P on as their first argument (thread_parameters in gpu_shader/dialects.py).
+
+__kernel void render(PARAMETERS,
+                     __global vec4* restrict color_hit,
+                     __global vec4* restrict normal_depth,
+                     __global vec4* restrict steps_id)
+{
+    // Work-item (column, row) is the pixel whose centre is (column + 0.5, row + 0.5), row 0
+    // at the top, as in the reference. The launch may be padded to whole work-groups.
+    int column = get_global_id(0);
+    int row = get_global_id(1);
+    if (column >= (int)(IMAGE_WIDTH) || row >= (int)(IMAGE_HEIGHT)) {
+        return;
+    }
+    real x = (real)(column) + 0.5;
+    real y = (real)(row) + 0.5;
+    vec3 direction = camera_ray(x, y);
+    Hit h = march(CAMERA_POSITION, direction, MAX_DISTANCE);
+
+    vec3 n = vec3(0.0);
+    int id = -1;
+    if (h.hit == 1) {
+        precise vec3 p = CAMERA_POSITION + h.t * direction;
+        n = estimate_normal(p);
+        id = scene_object_id(p);
+    }
+    vec4 color_path = pixel_color(CAMERA_POSITION, direction, h, n, id);
+
+    int pixel = row * (int)(IMAGE_WIDTH) + column;
+    color_hit[pixel] = vec4(clamp(color_path.xyz, 0.0, 1.0), (real)(h.hit));
+    normal_depth[pixel] = vec4(n, h.hit == 1 ? h.t : INFINITY);
+    steps_id[pixel] = vec4((real)(h.steps), (real)(id), color_path.w, 0.0);
+}

@@ -1,0 +1,33 @@
+"""The three planes a generated program writes per pixel, and the `Frame` they make.
+
+The GLSL shader writes them into three RGBA32F render targets, the OpenCL kernel into three
+buffers of 4-vectors (``glsl/main.frag``, ``glsl/main.cl``):
+
+    0  colour r, g, b in [0, 1]; 1 on a hit, 0 on a miss
+    1  unit normal x, y, z; depth t (inf on a miss)
+    2  SDF evaluations; object id (-1 on a miss); path label (24 bits, exact in a float); 0
+
+Each plane is (H, W, 4), row 0 at the top of the image. The program writes every value in
+its final form, so the Frame is views of the planes plus three integer casts.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from marchlab.frame import Frame
+from marchlab.scene import Scene
+
+
+def frame_from_planes(planes: np.ndarray, scene: Scene, backend: str, precision: str) -> Frame:
+    """The `Frame` held by ``planes``, a (3, H, W, 4) float array."""
+    color_hit, normal_depth, steps_id = planes
+    return Frame(color=color_hit[..., :3].astype(np.float32, copy=False),
+                 depth=normal_depth[..., 3],
+                 normal=normal_depth[..., :3],
+                 steps=steps_id[..., 0].astype(np.int32),
+                 object_id=steps_id[..., 1].astype(np.int32),
+                 hit=color_hit[..., 3] > 0.5, gamma=scene.render.gamma,
+                 max_steps=scene.render.max_steps,
+                 path=steps_id[..., 2].astype(np.uint32),
+                 backend=backend, precision=precision)
