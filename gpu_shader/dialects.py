@@ -164,31 +164,38 @@ _OPENCL_PARAMETERS = """\
 """
 
 _FUNCTION = re.compile(r"^(?!__kernel)(\w+)\s+(\w+)\s*\(([^)]*)\)\s*\n\{\n(.*?)^\}", re.M | re.S)
-_PARAMETER_MACRO = re.compile(r"^#define\s+(\w+)(?:\([^)]*\))?\s+.*\b[PU]\[", re.M)
+_MACRO = re.compile(r"^#define\s+(\w+)(?:\([^)]*\))?[ \t]+(.*)$", re.M)
+_COMMENT = re.compile(r"//[^\n]*")
 
 
 def thread_parameters(source: str) -> str:
     """Give every function that reads ``P`` or ``U`` (or calls one that does) a first
-    argument ``PARAMETERS``, and pass ``P`` at each call."""
-    macros = set(_PARAMETER_MACRO.findall(source))
-    reads = re.compile(r"\b(?:P|U)\[" + "".join(rf"|\b{m}\b" for m in sorted(macros)))
-    functions = {m.group(2): m.group(4) for m in _FUNCTION.finditer(source)}
+    argument ``PARAMETERS``, and pass ``P`` at each call. Comments are left as they are."""
+    code = _COMMENT.sub("", source)
+    macros: set[str] = set()
+    while True:                      # macros that read P, directly or through another macro
+        reads = re.compile(r"\b(?:P|U)\[" + "".join(rf"|\b{m}\b" for m in sorted(macros)))
+        found = {m.group(1) for m in _MACRO.finditer(code) if reads.search(m.group(2))}
+        if found <= macros:
+            break
+        macros |= found
+    functions = {m.group(2): m.group(4) for m in _FUNCTION.finditer(code)}
     needs = {name for name, body in functions.items() if reads.search(body)}
-    grew = True
-    while grew:                      # callers of functions that need P need it too
-        calls = re.compile(r"\b(?:" + "|".join(sorted(needs)) + r")\s*\(") if needs else None
-        more = {n for n, body in functions.items() if n not in needs and calls and calls.search(body)}
+    while needs:                     # callers of functions that need P need it too
+        calls = re.compile(r"\b(?:" + "|".join(sorted(needs)) + r")\s*\(")
+        more = {n for n, body in functions.items() if n not in needs and calls.search(body)}
+        if not more:
+            break
         needs |= more
-        grew = bool(more)
     if not needs:
         return source
-    call = re.compile(r"\b(" + "|".join(sorted(needs)) + r")\(\s*(\)?)")
+    call = re.compile(r"\b(" + "|".join(sorted(needs)) + r")\s*\(\s*(\)?)")
     definition = re.compile(r"^(\w+\s+)(" + "|".join(sorted(needs)) + r")\(P(, |\))", re.M)
     lines = []
     for line in source.split("\n"):
-        code, hash_, comment = line.partition("//")
-        code = call.sub(lambda m: f"{m.group(1)}(P{')' if m.group(2) else ', '}", code)
-        lines.append(code + hash_ + comment)
+        text, slashes, comment = line.partition("//")
+        text = call.sub(lambda m: f"{m.group(1)}(P{')' if m.group(2) else ', '}", text)
+        lines.append(text + slashes + comment)
     return definition.sub(lambda m: f"{m.group(1)}{m.group(2)}(PARAMETERS{m.group(3)}",
                           "\n".join(lines))
 

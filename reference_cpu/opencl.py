@@ -7,8 +7,9 @@ the parameters are a buffer, so programs are cached by their text (the scene's s
 Device selection has to work on real machines: an OpenCL platform can be installed and still
 unable to build a kernel (the PoCL wheel from PyPI does not know some CPUs: "unknown target
 CPU 'generic'"). So every platform/device is tried with a tiny kernel and the first that
-builds and runs it is used; ``MARCHLAB_OPENCL_DEVICE`` picks one by index ("0:1") or by part
-of its name ("pocl"). The choice is made once per process.
+builds and runs it is used; ``MARCHLAB_OPENCL_DEVICE`` picks one by platform:device index
+("0:1"), by its position in the list of all devices ("1"), or by part of its name ("pocl").
+The choice is made once per process.
 """
 
 from __future__ import annotations
@@ -112,7 +113,10 @@ def choose_device(wanted: str = "") -> Device:
     if not found:
         raise MarchlabError(f"no OpenCL platform found; {INSTALL_HINT}")
     if wanted:
-        matching = [c for c in found if wanted == c[0] or wanted.lower() in c[1].lower()]
+        if wanted.isdigit():     # a position in the list of every device
+            matching = found[int(wanted):int(wanted) + 1]
+        else:
+            matching = [c for c in found if wanted == c[0] or wanted.lower() in c[1].lower()]
         if not matching:
             listed = "; ".join(f"{index} {label}" for index, label, _ in found)
             raise MarchlabError(f"{DEVICE_VARIABLE}={wanted!r} matches no OpenCL device "
