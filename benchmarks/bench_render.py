@@ -104,6 +104,9 @@ def device(backend: str) -> str:
     if backend == "gpu":
         from gpu_shader.render import device_name
         return f"OpenGL renderer {device_name()}"
+    if backend == "opencl":
+        from reference_cpu.opencl import device_name
+        return f"OpenCL device {device_name()}"
     return cpu_name()
 
 
