@@ -1,4 +1,5 @@
-"""The three planes a generated program writes per pixel, and the `Frame` they make.
+"""The three planes a generated program writes per pixel, the `Frame` they make, and the bands
+of rows a program is run in when progress is reported.
 
 The GLSL shader writes them into three RGBA32F render targets, the OpenCL kernel into three
 buffers of 4-vectors (``glsl/main.frag``, ``glsl/main.cl``):
@@ -18,6 +19,8 @@ import numpy as np
 from marchlab.frame import Frame
 from marchlab.scene import Scene
 
+BANDS = 8              # with a progress callback, a program runs in this many bands of rows
+
 
 def frame_from_planes(planes: np.ndarray, scene: Scene, backend: str, precision: str) -> Frame:
     """The `Frame` held by ``planes``, a (3, H, W, 4) float array."""
@@ -31,3 +34,12 @@ def frame_from_planes(planes: np.ndarray, scene: Scene, backend: str, precision:
                  max_steps=scene.render.max_steps,
                  path=steps_id[..., 2].astype(np.uint32),
                  backend=backend, precision=precision)
+
+
+def row_bands(height: int, progress) -> list[tuple[int, int]]:
+    """(start, stop) rows per launch: the whole image at once, or `BANDS` bands when a
+    progress callback wants reports along the way."""
+    if progress is None:
+        return [(0, height)]
+    rows = -(-height // BANDS)
+    return [(start, min(start + rows, height)) for start in range(0, height, rows)]

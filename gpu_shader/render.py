@@ -22,10 +22,9 @@ from marchlab.scene import Scene
 from .context import gl_context, renderer_name
 from .generate import generate
 from .library import GLSL_DIR
-from .planes import frame_from_planes
+from .planes import frame_from_planes, row_bands
 
 PROGRAM_CACHE_SIZE = 32
-BANDS = 8               # with a progress callback, draw in this many bands of rows
 
 
 class ShaderCompileError(MarchlabError):
@@ -100,9 +99,7 @@ class Renderer:
         if progress is None:
             vao.render(vertices=3)
             return
-        rows = -(-height // BANDS)
-        for start in range(0, height, rows):
-            stop = min(start + rows, height)
+        for start, stop in row_bands(height, progress):
             self.ctx.scissor = (0, start, width, stop - start)
             vao.render(vertices=3)
             self.ctx.finish()

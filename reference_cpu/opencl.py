@@ -22,7 +22,7 @@ from typing import Callable
 import numpy as np
 
 from gpu_shader.generate import generate
-from gpu_shader.planes import frame_from_planes
+from gpu_shader.planes import frame_from_planes, row_bands
 from marchlab.errors import MarchlabError
 from marchlab.frame import Frame
 from marchlab.scene import Scene
@@ -31,7 +31,6 @@ DEVICE_VARIABLE = "MARCHLAB_OPENCL_DEVICE"
 INSTALL_HINT = ("install a working OpenCL CPU driver (Debian/Ubuntu: apt install "
                 "pocl-opencl-icd; `make demo` does this)")
 PROGRAM_CACHE_SIZE = 32
-BANDS = 8                      # with a progress callback, launch in this many bands of rows
 WORK_GROUP = (16, 4)           # pixels per work-group (columns, rows); see docs/performance.md
 
 # The smallest kernel that proves a device can compile and run code.
@@ -182,7 +181,7 @@ def render(scene: Scene, width: int, height: int, precision: str = "float32",
     outputs = [cl.Buffer(dev.context, flags.WRITE_ONLY, planes[i].nbytes) for i in range(3)]
     kernel.set_args(parameters, *outputs)
     local = WORK_GROUP
-    for start, stop in _bands(height, progress):
+    for start, stop in row_bands(height, progress):
         rows = stop - start
         global_size = (_round_up(width, local[0]), _round_up(rows, local[1]))
         cl.enqueue_nd_range_kernel(dev.queue, kernel, global_size, local,
@@ -229,13 +228,6 @@ def build_options(cl, dev: Device, precision: str) -> list[str]:
         if dev.cl_device.single_fp_config & rounded:
             options.append("-cl-fp32-correctly-rounded-divide-sqrt")
     return options
-
-
-def _bands(height: int, progress) -> list[tuple[int, int]]:
-    if progress is None:
-        return [(0, height)]
-    rows = -(-height // BANDS)
-    return [(start, min(start + rows, height)) for start in range(0, height, rows)]
 
 
 def _round_up(n: int, multiple: int) -> int:
