@@ -1,0 +1,9 @@
+"""Self-checks for the lessons' exercises.
+
+A student writes, say, ``sdf_torus`` in a notebook and calls ``marchlab.check.sdf_torus(fn)``:
+the check compares it with marchlab's own function on random inputs and prints what is wrong
+(or that it passed). Graphics exercises live in `graphics`, physics ones in `physics`.
+"""
+
+from .graphics import *   # noqa: F401,F403
+from .physics import *    # noqa: F401,F403
