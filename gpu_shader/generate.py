@@ -22,12 +22,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from marchlab.bounds import object_bounds
 from marchlab.camera import camera_basis
 from marchlab.colormaps import HEAT_COLORS, HEAT_STOPS
 from marchlab.errors import MarchlabError
 from marchlab.scene import DirectionalLight, PointLight, Scene, SpotLight
 from marchlab.shapes import primitives
+from reference_cpu.culling import MAX_CULLED
 from reference_cpu.normals import STENCILS
+from reference_cpu.relaxation import SLOPE_WEIGHT
 
 from .dialects import Dialect
 from .dialects import dialect as get_dialect
@@ -87,14 +90,22 @@ class _Generator:
 
     def program(self, width: int, height: int) -> Program:
         self.settings_rows(width, height)
-        sdf_source, sdf_used = scene_sdf_code(self.scene.objects, self.block)
+        bounds = None
+        if self.s.bounding_spheres:
+            self.features.add("bounding_spheres")
+            bounds = object_bounds(self.scene.objects, 2 * self.s.epsilon)[:MAX_CULLED]
+        sdf_source, sdf_used = scene_sdf_code(self.scene.objects, self.block, bounds)
         self.features |= sdf_used
         parts = [
             ("the SDF building blocks used by this scene (glsl/sdf.glsl)",
              load_library("sdf").select(sdf_used)),
+            ("bounding spheres (glsl/culling.glsl)",
+             load_library("culling").select(["ray_meets_sphere"]) if bounds is not None else ""),
             ("the scene's SDF tree", sdf_source),
             ("the camera (glsl/camera.glsl)", load_library("camera").select(["camera_ray"])),
-            ("sphere tracing (glsl/march.glsl)", load_library("march").select(self.march_needs())),
+        ]
+        parts += self.march_parts()
+        parts += [
             ("surface normals", self.normal_code()),
         ]
         parts += self.shading_parts()
@@ -140,12 +151,25 @@ class _Generator:
 
     # --- marching and normals -----------------------------------------------------------------
 
-    def march_needs(self) -> list[str]:
+    def march_parts(self) -> list[tuple[str, str]]:
+        """The march (plain or relaxed) and the shadow function the settings ask for."""
         needs = ["march"]
         if self.s.shading in LIT_MODES and self.s.shadows != "none" and self.scene.lights:
             needs.append(f"{self.s.shadows}_shadow")
             self.features.add(f"shadows:{self.s.shadows}")
-        return needs
+        mode = self.s.relaxation
+        if mode == "none":
+            return [("sphere tracing (glsl/march.glsl)", load_library("march").select(needs))]
+        self.features.add(f"relaxation:{mode}")
+        if mode == "fixed":
+            self.block.named({"OMEGA": ("x", self.s.omega)})
+        defines = (f"#define RELAXATION_AUTO {int(mode == 'auto')}\n"
+                   + (f"#define SLOPE_WEIGHT {self.d.literal(SLOPE_WEIGHT)}\n"
+                      if mode == "auto" else "") + "\n")
+        return [(f"over-relaxed sphere tracing, {mode} (glsl/relaxed.glsl)",
+                 defines + load_library("relaxed").select(["march"])),
+                ("shadow rays (glsl/march.glsl)",
+                 load_library("march").select(needs[1:], provided={"march"}))]
 
     def normal_code(self) -> str:
         """``estimate_normal`` written out for the chosen stencil (`reference_cpu.normals`)."""

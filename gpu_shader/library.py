@@ -37,8 +37,12 @@ class Library:
     def names(self) -> list[str]:
         return [f.name for f in self.functions]
 
-    def select(self, wanted) -> str:
-        """Source text of the functions in ``wanted`` and of everything they call."""
+    def select(self, wanted, provided=frozenset()) -> str:
+        """Source text of the functions in ``wanted`` and of everything they call.
+
+        Functions named in ``provided`` are left out (the program takes them from
+        elsewhere, e.g. the relaxed ``march`` of glsl/relaxed.glsl).
+        """
         by_name = {f.name: f for f in self.functions}
         unknown = set(wanted) - set(by_name)
         if unknown:
@@ -46,7 +50,7 @@ class Library:
         needed, todo = set(), list(wanted)
         while todo:
             name = todo.pop()
-            if name not in needed:
+            if name not in needed and name not in provided:
                 needed.add(name)
                 todo.extend(by_name[name].calls)
         return "\n".join(f.text for f in self.functions if f.name in needed)

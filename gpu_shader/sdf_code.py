@@ -177,13 +177,20 @@ class SdfWriter:
         return result, result_id
 
 
-def scene_sdf_code(objects, block: ParameterBlock) -> tuple[str, set[str]]:
-    """Source of ``scene_sdf`` and ``scene_object_id`` and the library functions they use."""
+def scene_sdf_code(objects, block: ParameterBlock,
+                   bounds=None) -> tuple[str, set[str]]:
+    """Source of ``scene_sdf``, ``scene_object_id`` and the marches' ``ray_objects`` and
+    ``march_sdf``, and the library functions they use.
+
+    ``bounds``, the list of `marchlab.bounds.object_bounds`, turns on bounding-sphere
+    culling; None writes a ``march_sdf`` that is ``scene_sdf``.
+    """
     root = scene_root(objects)
     if root is None:
         return ("// An empty scene: every ray misses.\n"
                 "real scene_sdf(vec3 p)\n{\n    return MAX_DISTANCE * 2.0;\n}\n\n"
-                "int scene_object_id(vec3 p)\n{\n    return -1;\n}\n"), set()
+                "int scene_object_id(vec3 p)\n{\n    return -1;\n}\n\n"
+                + _unculled_march_sdf()), set()
     distances = SdfWriter(block, with_ids=False)
     d, _ = distances.node(root, "p")
     ids = SdfWriter(block, with_ids=True, replay=distances.rows)
@@ -195,5 +202,52 @@ def scene_sdf_code(objects, block: ParameterBlock) -> tuple[str, set[str]]:
         f"real scene_sdf(vec3 p)\n{{\n{body}    return {d};\n}}\n\n"
         "// The object id (depth-first index of the primitive) whose distance the tree\n"
         "// chose at p: the same walk, keeping track of ids.\n"
-        f"int scene_object_id(vec3 p)\n{{\n{id_body}    return {object_id};\n}}\n")
-    return source, distances.used
+        f"int scene_object_id(vec3 p)\n{{\n{id_body}    return {object_id};\n}}\n\n")
+    if bounds is None:
+        return source + _unculled_march_sdf(), distances.used
+    # The union node of several objects allocated the first (empty) entry of the walk.
+    replay = distances.rows[1:] if len(objects) > 1 else distances.rows
+    culled, used = _culled_march_sdf(objects, block, bounds, replay)
+    return source + culled, distances.used | used
+
+
+def _unculled_march_sdf() -> str:
+    return ("// Bounding-sphere culling is off: every march sees every object.\n"
+            "uint ray_objects(vec3 origin, vec3 direction)\n{\n    return 0u;\n}\n\n"
+            "real march_sdf(vec3 p, uint objects)\n{\n    return scene_sdf(p);\n}\n")
+
+
+def _culled_march_sdf(objects, block: ParameterBlock, bounds, replay) -> tuple[str, set[str]]:
+    """``ray_objects`` (which bounded objects a ray may reach, one bit each) and ``march_sdf``
+    (the union of the objects a ray keeps), as `reference_cpu.culling` and
+    `reference_cpu.scene_sdf.build_scene_sdf` compute them."""
+    bit = {index: 1 << k for k, (index, _, _) in enumerate(bounds)}
+    tests = []
+    for index, centre, radius in bounds:
+        name = f"BOUND{index}"
+        block.named({name: ("xyzw", [*centre, radius])})
+        tests.append(f"    if (ray_meets_sphere(origin, direction, {name})) {{\n"
+                     f"        objects = objects | {bit[index]}u;\n    }}\n")
+    writer = SdfWriter(block, with_ids=False, replay=replay)
+    body = []
+    for index, node in enumerate(objects):
+        writer.lines = []
+        d, _ = writer.node(node, "p")
+        lines = writer.lines + [f"d = op_union(d, {d});"]
+        if index in bit:
+            body.append(f"    if ((objects & {bit[index]}u) != 0u) {{\n"
+                        + "".join(f"        {line}\n" for line in lines) + "    }\n")
+        else:
+            body.append(f"    // object {index} has no bounding sphere: always in\n"
+                        + "".join(f"    {line}\n" for line in lines))
+    source = (
+        "// Bit k of the result is set where the ray may reach the k-th object with a\n"
+        "// bounding sphere (BOUNDj: centre, radius widened by 2 epsilon; reference_cpu/\n"
+        "// culling.py). Objects without one (planes, endless repetition) are always in.\n"
+        "uint ray_objects(vec3 origin, vec3 direction)\n{\n    uint objects = 0u;\n"
+        + "".join(tests) + "    return objects;\n}\n\n"
+        "// The scene's distance for one march: the union of the objects its ray may reach\n"
+        "// (the others count as infinitely far), in the order of scene_sdf.\n"
+        "real march_sdf(vec3 p, uint objects)\n{\n    real d = INFINITY;\n"
+        + "".join(body) + "    return d;\n}\n")
+    return source, writer.used | {"op_union"}

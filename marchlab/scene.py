@@ -160,6 +160,14 @@ class RenderSettings(Record):
     max_steps: int = param(256, "Most SDF evaluations along one ray.", at_least(1))
     epsilon: float = param(1e-3, "A ray hits where |distance| < epsilon.", positive)
     max_distance: float = param(100.0, "A ray misses beyond this distance.", positive)
+    relaxation: Literal["none", "fixed", "auto"] = param(
+        "none", "Over-relaxed steps: none (Hart's plain steps), fixed (omega times the "
+                "distance, Keinert et al. 2014) or auto (omega from the field's slope along "
+                "the ray, Ban & Valasek 2023); both step back when two consecutive spheres "
+                "do not overlap.")
+    omega: float = param(1.2, "Relaxation factor of relaxation = \"fixed\".", between(1.0, 2.0))
+    bounding_spheres: bool = param(False, "Leave out of each ray's march the objects whose "
+                                          "bounding sphere it misses (source 000).")
     normal_method: Literal["central", "tetrahedron"] = param(
         "central", "Gradient estimate: central differences (6 evaluations) or Quilez's "
                    "tetrahedron (4).")

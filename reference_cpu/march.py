@@ -10,6 +10,11 @@ surface, so the ray may safely advance by it. The rules, identical in every back
 - after max_steps evaluations without a hit the ray misses.
 
 Stepping by |d| (not d) lets a ray that starts inside a solid walk out to its surface.
+
+Two render settings change how far a step goes, never where a ray may stop
+(`reference_cpu.relaxation` states their rules): over-relaxation steps omega d_i instead of
+d_i and steps back when that may have skipped a surface, and bounding-sphere culling
+(`reference_cpu.culling`) leaves out of each ray's SDF the objects it cannot reach.
 """
 
 from __future__ import annotations
@@ -17,7 +22,8 @@ from __future__ import annotations
 import numpy as np
 
 
-def march(origins, directions, sdf, max_steps, epsilon, max_distance, observe=None):
+def march(origins, directions, sdf, max_steps, epsilon, max_distance, observe=None, *,
+          relaxation="none", omega=1.2, bounds=None):
     """March every ray until it hits, escapes, or runs out of steps.
 
     Parameters
@@ -28,7 +34,8 @@ def march(origins, directions, sdf, max_steps, epsilon, max_distance, observe=No
         Unit ray directions.
     sdf : callable
         ``sdf(p)`` for ``p : (M, 3)`` returns ``(distance (M,), ...)``, as built by
-        `reference_cpu.scene_sdf.build_scene_sdf`.
+        `reference_cpu.scene_sdf.build_scene_sdf`; with ``bounds``, it is called as
+        ``sdf(p, objects)`` with the (M, objects) mask of the objects each ray may reach.
     max_steps : int
     epsilon : float
         Hit threshold on |distance|.
@@ -37,6 +44,10 @@ def march(origins, directions, sdf, max_steps, epsilon, max_distance, observe=No
     observe : callable, optional
         Called every step as ``observe(index, t, distance, step)`` with the pixel index,
         current t and |SDF| of each ray still marching (soft shadows use it).
+    relaxation : {"none", "fixed", "auto"}
+        How far a step goes (`reference_cpu.relaxation`); ``omega`` is the fixed factor.
+    bounds : reference_cpu.culling.BoundingSpheres, optional
+        Bounding-sphere culling: each ray's SDF leaves out the objects it cannot reach.
 
     Returns
     -------
@@ -62,14 +73,31 @@ def march(origins, directions, sdf, max_steps, epsilon, max_distance, observe=No
     t = np.zeros(n, dtype=dtype)
     limit = np.asarray(max_distance, dtype=dtype)      # a scalar, or one limit per ray
     live = np.ones(n, dtype=bool)
+    # Per-ray state of the optional features, compacted with the rest.
+    extra = {}
+    if bounds is not None:
+        extra["objects"] = bounds.objects_met(o, d)
+        scene_sdf = lambda p: sdf(p, extra["objects"])
+    else:
+        scene_sdf = sdf
+    relax = None
+    if relaxation != "none":
+        from .relaxation import Relaxation
+        relax = Relaxation(relaxation, omega, n, dtype)
 
     for step in range(1, max_steps + 1):
-        dist = np.abs(sdf(o + t[:, None] * d)[0])
+        dist = np.abs(scene_sdf(o + t[:, None] * d)[0])
         if observe is not None:
             observe(index[live], t[live], dist[live], step)
-        t_next = t + dist
-        arrived = live & (dist < eps)
-        finished = arrived | (live & (t_next > limit))
+        if relax is None:
+            t_next = t + dist
+            arrived = live & (dist < eps)
+            finished = arrived | (live & (t_next > limit))
+        else:
+            # A step that may have skipped a surface is taken back; that point decides nothing.
+            t_next, valid = relax.step(t, dist)
+            arrived = live & valid & (dist < eps)
+            finished = arrived | (live & valid & (t + dist > limit))
         if finished.any():
             steps[index[finished]] = step
             hit[index[arrived]] = True
@@ -84,6 +112,9 @@ def march(origins, directions, sdf, max_steps, epsilon, max_distance, observe=No
                     o = columns(o[keep])
                 if limit.ndim == 1:
                     limit = limit[keep]
+                extra = {name: value[keep] for name, value in extra.items()}
+                if relax is not None:
+                    relax.keep(keep)
         t = t_next
     return t_out, steps, hit
 

@@ -21,6 +21,7 @@ from marchlab.scene import Checker, Scene
 from marchlab.shapes import primitives
 
 from . import shading
+from .culling import BoundingSpheres
 from .lights import light_at
 from .march import march
 from .normals import estimate_normal
@@ -80,6 +81,12 @@ class Tracer:
         self.scene, self.settings, self.dtype = scene, scene.render, dtype
         self.sdf = build_scene_sdf(scene.objects, dtype)
         self.sdf_ids = build_scene_sdf(scene.objects, dtype, with_ids=True)
+        # How far each step of a march goes (relaxation, culling): the same for primary,
+        # mirror and hard-shadow rays. Soft shadows keep plain steps: their penumbra is
+        # read from the distances along the way, which both would change.
+        r = self.settings
+        self.marching = {"relaxation": r.relaxation, "omega": r.omega, "bounds": (
+            BoundingSpheres.of(scene.objects, r.epsilon, dtype) if r.bounding_spheres else None)}
         # Material parameters per primitive, indexed by object id (like a shader's UBO).
         mats = [scene.materials[p.material] for p in primitives(scene.objects)]
         table = lambda values: np.asarray(values, dtype=np.float64).astype(dtype)
@@ -98,7 +105,7 @@ class Tracer:
     def trace(self, origin, directions) -> dict[str, np.ndarray]:
         s = self.settings
         t, steps, hit = march(origin, directions, self.sdf, s.max_steps, s.epsilon,
-                              s.max_distance)
+                              s.max_distance, **self.marching)
         normal = np.zeros_like(directions)
         object_id = np.full(len(directions), -1, np.int32)
         normal[hit], object_id[hit] = self.hit_info(origin + t[hit, None] * directions[hit])
@@ -137,7 +144,8 @@ class Tracer:
             if bounce == 0:                                   # the primary ray, traced
                 normal, ids = normal[hit], object_id[hit]
             else:
-                t, _, hit = march(o, d, self.sdf, s.max_steps, s.epsilon, s.max_distance)
+                t, _, hit = march(o, d, self.sdf, s.max_steps, s.epsilon, s.max_distance,
+                                  **self.marching)
                 normal, ids = self.hit_info(o[hit] + t[hit, None] * d[hit])
             p = o[hit] + t[hit, None] * d[hit]
             miss = ~hit
@@ -226,7 +234,7 @@ class Tracer:
             self.dtype.type(s.surface_offset) * surface.normal[facing]
         args = (self.sdf, origins, to_light[facing], distance[facing], s.max_steps,
                 s.epsilon, s.max_distance)
-        visible[facing] = (hard_shadow(*args) if s.shadows == "hard"
+        visible[facing] = (hard_shadow(*args, **self.marching) if s.shadows == "hard"
                            else soft_shadow(*args, self.dtype.type(s.penumbra_k)))
         return to_light, radiance * visible[:, None], (visible == 0) & (s.shadows == "hard")
 

@@ -20,6 +20,7 @@ from marchlab.shapes import (Box, Capsule, CappedCylinder, Cone, Intersection, N
                              Translate, Union)
 
 from . import sdf as S
+from .march import columns
 
 # sdf(p) -> (distance (N,), object id (N,) int or None when ids were not asked for)
 SDF = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray | None]]
@@ -40,12 +41,44 @@ def build_scene_sdf(objects, dtype=np.float64, with_ids: bool = False) -> SDF:
 
     With ``with_ids`` the function also returns the object id at each point; without, it
     skips that bookkeeping (marching needs only distances) and returns None for the ids.
+
+    The function is ``sdf(p, objects=None)``. ``objects``, an (N, len(objects)) bool array,
+    leaves object j out of point i's union where ``objects[i, j]`` is False (bounding-sphere
+    culling, `reference_cpu.culling`): its distance counts as inf there, and it is
+    evaluated only at the points that keep it.
     """
-    if not objects:
-        return lambda p: (np.full(len(p), np.inf, dtype=p.dtype),
-                          np.full(len(p), -1, dtype=np.int32) if with_ids else None)
-    root = objects[0] if len(objects) == 1 else Union(tuple(objects))
-    return _build(root, np.dtype(dtype), with_ids, iter(range(1 << 30)))
+    dtype = np.dtype(dtype)
+    next_id = iter(range(1 << 30))
+    parts = [_build(node, dtype, with_ids, next_id) for node in objects]
+
+    def scene_sdf(p, objects=None):
+        d, ids = _empty(len(p), dtype, with_ids)
+        # The union of the objects, folded left to right like a Union node (see _COMBINE).
+        for j, part in enumerate(parts):
+            d2, ids2 = part(p) if objects is None else _where_kept(part, p, objects[:, j],
+                                                                    dtype, with_ids)
+            if with_ids:
+                ids = np.where(d <= d2, ids, ids2) if j else ids2
+            d = S.op_union(d, d2) if j else d2
+        return d, ids
+    return scene_sdf
+
+
+def _empty(n, dtype, with_ids):
+    """What a point sees with no object: distance inf, object id -1."""
+    return np.full(n, np.inf, dtype=dtype), np.full(n, -1, np.int32) if with_ids else None
+
+
+def _where_kept(part, p, kept, dtype, with_ids):
+    """``part(p)`` where ``kept`` (N,) is True, (inf, -1) elsewhere."""
+    if kept.all():
+        return part(p)
+    d, ids = _empty(len(p), dtype, with_ids)
+    if kept.any():
+        d[kept], part_ids = part(columns(p[kept]))
+        if with_ids:
+            ids[kept] = part_ids
+    return d, ids
 
 
 def _build(node: Node, dtype: np.dtype, with_ids: bool, next_id) -> SDF:

@@ -12,7 +12,8 @@ import numpy as np
 from .march import march
 
 
-def hard_shadow(sdf, origins, to_light, light_distance, max_steps, epsilon, max_distance):
+def hard_shadow(sdf, origins, to_light, light_distance, max_steps, epsilon, max_distance,
+                **marching):
     """1 where the light is visible, 0 where the shadow ray hits something first.
 
     The shadow ray is an ordinary march (`reference_cpu.march.march`) limited to the distance
@@ -26,9 +27,11 @@ def hard_shadow(sdf, origins, to_light, light_distance, max_steps, epsilon, max_
         Unit directions toward the light.
     light_distance : (N,) ndarray
         Distance to the light (inf for a directional light).
+    **marching
+        ``relaxation``, ``omega``, ``bounds`` of `reference_cpu.march.march`.
     """
     limit = np.minimum(light_distance, max_distance)
-    _, _, blocked = march(origins, to_light, sdf, max_steps, epsilon, limit)
+    _, _, blocked = march(origins, to_light, sdf, max_steps, epsilon, limit, **marching)
     return np.where(blocked, 0, 1).astype(origins.dtype)
 
 

@@ -16,12 +16,13 @@
 
 Hit march(vec3 origin, vec3 direction, real limit)
 {
+    uint objects = ray_objects(origin, direction);     // bounding-sphere culling, if on
     precise real t = 0.0;
     real d = 0.0;
     int step;
     for (step = 1; step <= MAX_STEPS; step++) {
         precise vec3 p = origin + t * direction;
-        d = abs(scene_sdf(p));
+        d = abs(march_sdf(p, objects));
         if (d < EPSILON) {
             break;                  // hit at this t
         }

@@ -1,0 +1,87 @@
+"""Bounding-sphere culling: which objects can a ray reach at all?
+
+Source 000 made its scenes fast with ``intersectsBoundingVolume``: before marching a ray, test
+it against each object's bounding sphere, and leave the objects it misses out of the scene's
+distance for that whole march. Sphere tracing stays safe: the distance to the objects left in
+is still a bound on how far the ray may go before it meets any of them, and the ray can meet
+none of the others. Left out, a far object no longer holds a passing ray back, so rays that
+pass close to an object without touching it take fewer steps.
+
+The spheres come from `marchlab.bounds.object_bounds`, widened by 2 epsilon: a ray that passes
+outside one stays farther than epsilon from the object, where the plain march would not have
+stopped either. Unbounded objects (planes, infinite repetition) are always in. The GLSL and
+OpenCL twin is ``glsl/culling.glsl``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from marchlab.bounds import object_bounds
+from marchlab.geometry import dot
+
+MAX_CULLED = 32     # objects with a sphere, at most: the shader keeps one bit per object
+
+
+@dataclass(frozen=True)
+class BoundingSpheres:
+    """The culled objects of a scene in one precision.
+
+    Attributes
+    ----------
+    count : int
+        Number of top-level objects in the scene.
+    index : (K,) int ndarray
+        The object each sphere belongs to (K <= MAX_CULLED).
+    centre : (K, 3) ndarray
+    radius : (K,) ndarray
+        Already widened by the margin.
+    """
+    count: int
+    index: np.ndarray
+    centre: np.ndarray
+    radius: np.ndarray
+
+    @classmethod
+    def of(cls, objects, epsilon: float, dtype) -> BoundingSpheres:
+        bounds = object_bounds(objects, 2 * epsilon)[:MAX_CULLED]
+        as_dtype = lambda values: np.asarray(values, dtype=np.float64).astype(dtype)
+        return cls(len(objects), np.array([i for i, _, _ in bounds], dtype=np.intp),
+                   as_dtype([c for _, c, _ in bounds]).reshape(-1, 3),
+                   as_dtype([r for _, _, r in bounds]))
+
+    def objects_met(self, origins, directions) -> np.ndarray:
+        """Which objects each ray may reach: (N, count) bool, True for unbounded objects."""
+        n = len(directions)
+        met = np.ones((n, self.count), dtype=bool)
+        for k, index in enumerate(self.index):
+            met[:, index] = ray_meets_sphere(origins, directions, self.centre[k],
+                                             self.radius[k])
+        return met
+
+
+def ray_meets_sphere(origins, directions, centre, radius):
+    """Does the ray o + t d, t >= 0, touch the sphere? (source 000's bounding-volume test)
+
+    With oc = o - c, b = oc . d and c' = |oc|^2 - r^2, the ray's line meets the sphere where
+    t^2 + 2 b t + c' = 0 has real roots (b^2 - c' >= 0). Source 000 stops there; a ray also
+    needs a root at t >= 0: it starts inside (c' <= 0), or the sphere lies ahead (b <= 0).
+
+    Parameters
+    ----------
+    origins : (3,) or (N, 3) ndarray
+    directions : (N, 3) ndarray
+        Unit directions.
+    centre : (3,) ndarray
+    radius : scalar
+
+    Returns
+    -------
+    (N,) bool ndarray
+    """
+    oc = origins - centre
+    b = dot(oc, directions)
+    c = dot(oc, oc) - radius * radius
+    return (c <= 0) | ((b <= 0) & (b * b - c >= 0))
