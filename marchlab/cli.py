@@ -1,5 +1,6 @@
 """The ``marchlab`` command: render scenes, list and print them, print a scene's generated
-shader, compare two backends pixel by pixel, and simulate a scene's bodies into an animation.
+shader, compare two backends pixel by pixel, simulate a scene's bodies into an animation, and
+compute a scene's independent ground truth.
 
 A user error (a bad file, field, size or option) ends with one line on stderr and exit code 2;
 anything else is a bug and keeps its traceback.
@@ -8,6 +9,7 @@ anything else is a bug and keeps its traceback.
 from __future__ import annotations
 
 import argparse
+import io
 import math
 import sys
 import tempfile
@@ -23,7 +25,11 @@ from .render import BACKENDS, MAX_SIDE, PRECISIONS, backend_problem, render
 from .scenefile import bundled_scene_names, load_scene, scene_to_toml
 
 OUTPUT_SUFFIXES = (".png", ".npz")
-DASHED_VALUE_OPTIONS = ("--size", "--seconds", "--fps")
+DASHED_VALUE_OPTIONS = ("--size", "--seconds", "--fps", "--resolution")
+# reference_cpu.truth.METHODS, written out so that the CLI loads no backend until it runs one
+# (tests/truth/test_truth_cli.py keeps the two equal).
+TRUTH_METHODS = ("analytic", "embree")
+MAX_RESOLUTION = 512    # a 517^3 float64 grid is already 1.1 GB
 
 
 class Parser(argparse.ArgumentParser):
@@ -54,6 +60,18 @@ def positive_number(text: str) -> float:
         value = float("nan")
     if not (math.isfinite(value) and value > 0):
         raise argparse.ArgumentTypeError(f"expected a positive number (got {text!r})")
+    return value
+
+
+def grid_resolution(text: str) -> int:
+    """``"128"`` -> 128: marching-cubes cells, from 2 to `MAX_RESOLUTION`."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if not 2 <= value <= MAX_RESOLUTION:
+        raise argparse.ArgumentTypeError(
+            f"expected an integer from 2 to {MAX_RESOLUTION} (got {text!r})")
     return value
 
 
@@ -148,6 +166,22 @@ def build_parser() -> Parser:
                    help="override scene fields, e.g. --set physics.dt=0.001 "
                         "bodies[0].restitution=0.9")
     p.set_defaults(func=cmd_simulate)
+
+    p = sub.add_parser("truth", help="compute a scene's ground truth without sphere tracing "
+                                     "(depth, normal and hit images to an .npz file)")
+    p.add_argument("scene", help="bundled scene name or a .toml path")
+    p.add_argument("--method", choices=TRUTH_METHODS, default="analytic",
+                   help="analytic: exact float64 intersections (spheres, boxes, planes and "
+                        "their unions); embree: any bounded scene, meshed and ray-cast in "
+                        "float32 (default: analytic)")
+    p.add_argument("-o", "--output", help="output .npz file (default: SCENE-truth.npz)")
+    p.add_argument("--size", type=parse_size, default=(640, 480), metavar="WxH",
+                   help="image size in pixels (default: 640x480)")
+    p.add_argument("--resolution", type=grid_resolution, default=128, metavar="N",
+                   help="embree: marching-cubes cells across each meshed shape (default: 128)")
+    p.add_argument("--set", action="extend", nargs="+", default=[], metavar="FIELD=VALUE",
+                   help="override scene fields, e.g. --set camera.fov=40")
+    p.set_defaults(func=cmd_truth)
     return parser
 
 
@@ -305,6 +339,35 @@ def cmd_simulate(args) -> int:
     if args.csv:
         print(f"wrote {args.csv} ({len(trajectory.times)} records of "
               f"{trajectory.positions.shape[1]} bodies)")
+    return 0
+
+
+def cmd_truth(args) -> int:
+    import numpy as np
+    output = Path(args.output) if args.output else Path(f"{Path(args.scene).stem}-truth.npz")
+    if output.suffix.lower() != ".npz":
+        raise MarchlabError(f"{output}: unsupported output format {output.suffix!r} (use .npz)")
+    scene = load_scene(args.scene, args.set)
+    from reference_cpu.truth import ground_truth
+    width, height = args.size
+    start = time.perf_counter()
+    try:
+        truth = ground_truth(scene, width, height, method=args.method,
+                             resolution=args.resolution)
+    except SceneError as err:
+        raise err.in_file(args.scene) from None
+    seconds = time.perf_counter() - start
+    buffer = io.BytesIO()
+    np.savez_compressed(buffer, **truth.arrays())
+    try:
+        output.parent.mkdir(parents=True, exist_ok=True)
+        write_atomically(output, buffer.getvalue())
+    except OSError as err:
+        raise MarchlabError(f"{output}: cannot write: {err.strerror}") from None
+    print(f"wrote {output} ({width}x{height}, {args.method}: {int(truth.hit.sum())} of "
+          f"{width * height} pixels hit, error bound {truth.error_bound:.3g}, measured "
+          f"|sdf| max {truth.measured_error:.3g}, p99 {truth.measured_error_p99:.3g}; "
+          f"{seconds:.2f} s)")
     return 0
 
 
