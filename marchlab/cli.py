@@ -182,7 +182,35 @@ def build_parser() -> Parser:
     p.add_argument("--set", action="extend", nargs="+", default=[], metavar="FIELD=VALUE",
                    help="override scene fields, e.g. --set camera.fov=40")
     p.set_defaults(func=cmd_truth)
+
+    p = sub.add_parser("bench", help="measure the backends (see also benchmarks/)")
+    bench = p.add_subparsers(dest="bench", required=True, parser_class=Parser)
+    q = bench.add_parser("accuracy", help="sweep epsilon, max_steps, relaxation, culling and "
+                                          "normals on every backend: time against error "
+                                          "(writes a Markdown report and PNG plots)")
+    q.add_argument("-o", "--output", default="docs/speed-vs-error.md",
+                   help="the report (default: docs/speed-vs-error.md)")
+    q.add_argument("--images", default=None, metavar="DIR",
+                   help="folder for the plots (default: images/ beside the report)")
+    q.add_argument("--size", type=parse_size, default=(160, 120), metavar="WxH",
+                   help="image size in pixels (default: 160x120)")
+    q.add_argument("--repeat", type=positive_int, default=3, metavar="N",
+                   help="timed frames per configuration (default: 3)")
+    q.add_argument("--quick", action="store_true",
+                   help="one scene, two settings: check that the report can be made")
+    q.set_defaults(func=cmd_bench_accuracy)
     return parser
+
+
+def positive_int(text: str) -> int:
+    """``"3"`` -> 3, refusing zero, negative and non-integer values."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer (got {text!r})")
+    return value
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -368,6 +396,24 @@ def cmd_truth(args) -> int:
           f"{width * height} pixels hit, error bound {truth.error_bound:.3g}, measured "
           f"|sdf| max {truth.measured_error:.3g}, p99 {truth.measured_error_p99:.3g}; "
           f"{seconds:.2f} s)")
+    return 0
+
+
+def cmd_bench_accuracy(args) -> int:
+    from .accuracy import run
+    output = Path(args.output)
+    if output.suffix.lower() != ".md":
+        raise MarchlabError(f"{output}: the report is Markdown (use a .md file)")
+    images = Path(args.images) if args.images else output.parent / "images"
+    command = " ".join(["marchlab", "bench", "accuracy"] + sys.argv[3:]) if len(
+        sys.argv) > 2 else "marchlab bench accuracy"
+    try:
+        written = run(output, images, args.size, args.repeat, command, args.quick,
+                      echo=lambda line: print(line, file=sys.stderr, flush=True))
+    except OSError as err:
+        raise MarchlabError(f"{err.filename or output}: cannot write: {err.strerror}") from None
+    for path in written:
+        print(f"wrote {path}")
     return 0
 
 
