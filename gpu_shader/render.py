@@ -20,7 +20,7 @@ from marchlab.frame import Frame
 from marchlab.scene import Scene
 
 from .context import gl_context, renderer_name
-from .generate import generate
+from .generate import Program, generate
 from .library import GLSL_DIR
 from .planes import frame_from_planes, row_bands
 
@@ -49,6 +49,11 @@ def render(scene: Scene, width: int, height: int, precision: str = "float32",
     return _renderer().render(scene, width, height, progress)
 
 
+def render_program(scene: Scene, program: Program, width: int, height: int) -> Frame:
+    """Draw an already made ``program`` for ``scene`` (e.g. `gpu_shader.uber.uber_program`)."""
+    return _renderer().render_program(scene, program, width, height)
+
+
 _renderers: dict[int, "Renderer"] = {}
 
 
@@ -69,7 +74,13 @@ class Renderer:
         self.max_block = int(ctx.info["GL_MAX_UNIFORM_BLOCK_SIZE"])
 
     def render(self, scene: Scene, width: int, height: int, progress=None) -> Frame:
-        generated = generate(scene, width, height)
+        return self.render_program(scene, generate(scene, width, height), width, height,
+                                   progress)
+
+    def render_program(self, scene: Scene, generated: Program, width: int, height: int,
+                       progress=None) -> Frame:
+        """Draw a program made for ``scene`` at this size: `generate`'s, or another with the
+        same outputs (`gpu_shader.uber.uber_program`)."""
         parameters = generated.parameters.astype(np.float32)
         if parameters.nbytes > self.max_block:
             raise MarchlabError(
