@@ -6,6 +6,7 @@ a backend's dependencies are loaded the first time that backend is used.
 
 from __future__ import annotations
 
+import functools
 import importlib
 from dataclasses import dataclass
 from typing import Callable
@@ -88,3 +89,16 @@ def backend_problem(backend: str) -> str | None:
     except MarchlabError as err:
         return str(err)
     return None
+
+
+@functools.lru_cache(maxsize=None)
+def fastest_backend() -> str:
+    """The fastest backend that can render on this machine: "gpu", else "opencl", else "numpy".
+
+    Each candidate is asked once (`backend_problem`) and the answer is kept for the process,
+    so a lesson can call this before every render at no cost.
+    """
+    for backend in ("gpu", "opencl"):
+        if backend_problem(backend) is None:
+            return backend
+    return "numpy"

@@ -7,3 +7,4 @@ the check compares it with marchlab's own function on random inputs and prints w
 
 from .graphics import *   # noqa: F401,F403
 from .physics import *    # noqa: F401,F403
+from .result import CheckResult   # noqa: F401

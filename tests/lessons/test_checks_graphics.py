@@ -1,0 +1,280 @@
+"""The graphics self-checks of the lessons (marchlab.check.graphics) and `fastest_backend`.
+
+For every check: marchlab's own function passes it; a plausibly wrong function (a squared
+distance, a flipped sign, a missing clamp...) fails it with a message naming the likely cause;
+a function that raises, returns None, returns the wrong shape or changes its input fails it
+without the check raising. A check prints exactly the paragraph it returns.
+"""
+
+from __future__ import annotations
+
+import importlib
+
+import numpy as np
+import pytest
+
+from marchlab import check
+from marchlab.check import graphics
+from marchlab.geometry import dot, normalize
+from reference_cpu import march as M
+from reference_cpu import sdf as S
+from reference_cpu import shading as SH
+from reference_cpu import shadows as SW
+from reference_cpu.lights import attenuation
+
+REFERENCES = {
+    "sdf_sphere": S.sdf_sphere, "sdf_box": S.sdf_box, "sdf_round_box": S.sdf_round_box,
+    "sdf_plane": S.sdf_plane, "sdf_torus": S.sdf_torus,
+    "sdf_capped_cylinder": S.sdf_capped_cylinder, "sdf_capsule": S.sdf_capsule,
+    "sdf_cone": S.sdf_cone, "op_union": S.op_union, "op_intersection": S.op_intersection,
+    "op_subtraction": S.op_subtraction, "op_smooth_union": S.op_smooth_union,
+    "op_smooth_intersection": S.op_smooth_intersection,
+    "op_smooth_subtraction": S.op_smooth_subtraction, "op_translate": S.op_translate,
+    "op_rotate": S.op_rotate, "op_scale": S.op_scale, "op_repeat": S.op_repeat,
+    "reflect": SH.reflect, "diffuse": SH.diffuse, "specular_phong": SH.specular_phong,
+    "specular_blinn_phong": SH.specular_blinn_phong, "shade_phong": SH.shade_phong,
+    "shade_blinn_phong": SH.shade_blinn_phong, "attenuation": attenuation, "march": M.march,
+    "hard_shadow": SW.hard_shadow, "soft_shadow": SW.soft_shadow,
+}
+# marchlab.render is also the name of the render function in marchlab/__init__.py
+render_module = importlib.import_module("marchlab.render")
+
+ALIASES = {"smooth_union": "op_smooth_union", "phong": "specular_phong",
+           "blinn_phong": "specular_blinn_phong"}
+
+
+def _lit(s, incoming, ambient, specular, tint=False, with_ambient=True):
+    """Phong-style sum written out here, with switches for two classic mistakes."""
+    color = s.ka[:, None] * s.albedo * ambient * with_ambient
+    for l, radiance in incoming:
+        highlight = (s.ks * specular(s.normal, l, s.view, s.shininess))[:, None]
+        color = color + radiance * (s.kd[:, None] * SH.diffuse(s.normal, l)[:, None] * s.albedo
+                                    + highlight * (s.albedo if tint else 1))
+    return color
+
+
+def _signed_march(origins, directions, sdf, max_steps, epsilon, max_distance):
+    """Sphere tracing that forgets the absolute value: rays inside a solid stop at once."""
+    n = len(directions)
+    t, t_hit = np.zeros(n), np.full(n, np.inf)
+    steps, hit, live = np.full(n, max_steps), np.zeros(n, bool), np.ones(n, bool)
+    for step in range(1, max_steps + 1):
+        d = sdf(origins + t[:, None] * directions)[0]
+        arrived = live & (d < epsilon)
+        t_hit[arrived], steps[arrived], hit[arrived] = t[arrived], step, True
+        t = t + d
+        gone = live & ~arrived & (t > max_distance)
+        steps[gone] = step
+        live &= ~(arrived | gone)
+    return t_hit, steps, hit
+
+
+def _soft_shadow_keeping_blocked(sdf, o, l, distance, max_steps, epsilon, far, k):
+    """Quilez's estimate without setting blocked rays to 0."""
+    visible = np.ones(len(o))
+
+    def observe(index, t, h, step):
+        if step > 1:
+            visible[index] = np.minimum(visible[index], k * h / t)
+    M.march(o, l, sdf, max_steps, epsilon, np.minimum(distance, far), observe=observe)
+    return np.clip(visible, 0, 1)
+
+
+# (check, a plausible wrong answer, words the verdict must contain)
+WRONG = [
+    ("sdf_sphere", lambda p, r: dot(p, p) - r * r, "squared"),
+    ("sdf_box", lambda p, b: S.length(np.maximum(np.abs(p) - b, 0)), "inside"),
+    ("sdf_round_box", lambda p, b, r: S.sdf_box(p, b) - r, "shrunk"),
+    ("sdf_plane", lambda p, n, h: dot(p, n) - h, "unit length"),
+    ("sdf_torus", lambda p, big, small: S.sdf_torus(p, small, big), "swapped"),
+    ("sdf_capped_cylinder", lambda p, r, h: S.length2(p[:, 0], p[:, 2]) - r, "infinite"),
+    ("sdf_capsule", lambda p, a, b, r: S.length(
+        p - a - (dot(p - a, b - a) / dot(b - a, b - a))[:, None] * (b - a)) - r, "clamped"),
+    ("sdf_cone", lambda p, r, h: -S.sdf_cone(p, r, h), "sign is flipped"),
+    ("op_union", lambda a, b: np.maximum(a, b), "intersection"),
+    ("op_intersection", lambda a, b: np.minimum(a, b), "union"),
+    ("op_subtraction", lambda a, b: np.maximum(-a, b), "shape 1 minus shape 2"),
+    ("op_smooth_union", lambda a, b, k: _smooth_union_plus(a, b, k), "wrong sign"),
+    ("op_smooth_intersection", lambda a, b, k: np.maximum(a, b), "no blending"),
+    ("op_smooth_subtraction", lambda a, b, k: _without_fillet_subtraction(a, b, k), "missing"),
+    ("op_translate", lambda p, o: p + o, "opposite way"),
+    ("op_rotate", lambda p, m: p @ m.T, "Rᵀ"),
+    ("op_scale", lambda p, s: p * s, "p / s"),
+    ("op_repeat", lambda p, c: np.where(c > 0, np.mod(p, np.where(c > 0, c, 1)), p),
+     "not centred"),
+    ("reflect", lambda d, n: d - dot(d, n)[:, None] * n, "factor 2"),
+    ("diffuse", lambda n, l: dot(n, l), "not clamped"),
+    ("specular_phong", lambda n, l, v, a: np.where(
+        dot(n, l) > 0, np.maximum(dot(SH.reflect(l, n), v), 0) ** a, 0), "reflect(−L, N)"),
+    ("specular_blinn_phong", lambda n, l, v, a: np.where(
+        dot(n, l) > 0, np.maximum(dot(n, l + v), 0) ** a, 0), "normalize"),
+    ("shade_phong", lambda s, i, a: _lit(s, i, a, SH.specular_phong, tint=True), "albedo"),
+    ("shade_blinn_phong", lambda s, i, a: _lit(s, i, a, SH.specular_blinn_phong,
+                                               with_ambient=False), "ambient"),
+    ("attenuation", lambda d, c, l, q: c + l * d + q * d * d, "divides"),
+    ("march", _signed_march, "|sdf|"),
+    ("hard_shadow", lambda *args: 1 - SW.hard_shadow(*args), "other way round"),
+    ("soft_shadow", _soft_shadow_keeping_blocked, "set the visibility of blocked rays to 0"),
+]
+
+
+def _smooth_union_plus(a, b, k):
+    """Quilez's smooth minimum with its fillet k h (1 - h) added instead of subtracted."""
+    h = np.clip(0.5 + 0.5 * (b - a) / k, 0, 1)
+    return b + (a - b) * h + k * h * (1 - h)
+
+
+def _without_fillet_subtraction(a, b, k):
+    """The smooth subtraction's mix of d1 and -d2 without its k h (1 - h) term."""
+    h = np.clip(0.5 - 0.5 * (a + b) / k, 0, 1)
+    return a + (-b - a) * h
+
+
+def run(name, function, capsys=None):
+    """Run one check; with capsys, also assert that it printed exactly its message."""
+    result = getattr(check, name)(function)
+    if capsys is not None:
+        assert capsys.readouterr().out == result.message + "\n"
+    return result
+
+
+def test_every_check_is_exported_and_tested():
+    checks = {name for name in graphics.__all__ if name not in ("CheckResult", "TOLERANCE")}
+    assert checks == set(REFERENCES) | set(ALIASES)
+    assert {name for name, _, _ in WRONG} == set(REFERENCES)
+    for alias, name in ALIASES.items():
+        assert getattr(check, alias) is getattr(check, name)
+
+
+@pytest.mark.parametrize("name", sorted(REFERENCES))
+def test_reference_function_passes_its_own_check(name, capsys):
+    result = run(name, REFERENCES[name], capsys)
+    assert result.passed and bool(result)
+    assert result.samples >= 500
+    assert result.max_error == 0.0              # the same function on the same inputs
+    assert result.message.startswith(f"{name}: passed.")
+
+
+@pytest.mark.parametrize("name, wrong, cause", WRONG, ids=[w[0] for w in WRONG])
+def test_plausible_mistake_fails_with_its_likely_cause(name, wrong, cause, capsys):
+    result = run(name, wrong, capsys)
+    assert not result.passed and not bool(result)
+    assert result.message.startswith(f"{name}: not yet.")
+    flat = " ".join(result.message.split())       # the paragraph is wrapped at 96 columns
+    assert "Likely cause" in flat and cause in flat, flat
+
+
+@pytest.mark.parametrize("name", sorted(REFERENCES))
+def test_a_function_that_raises_is_reported_not_raised(name, capsys):
+    def broken(*args):
+        raise ValueError("operands could not be broadcast")
+
+    result = run(name, broken, capsys)
+    assert not result.passed
+    assert "raised ValueError: operands could not be broadcast" in " ".join(result.message.split())
+
+
+@pytest.mark.parametrize("name", sorted(REFERENCES))
+def test_an_exercise_template_gets_a_not_yet_message(name, capsys):
+    def template(*args):
+        raise NotImplementedError("write it here")
+
+    result = run(name, template, capsys)
+    assert not result.passed
+    assert result.message.startswith(f"{name}: not yet. Your function still raises "
+                                     "NotImplementedError")
+
+
+def test_missing_return_is_reported():
+    result = run("sdf_torus", lambda p, big, small: None)
+    assert not result.passed and "forget the `return`" in " ".join(result.message.split())
+
+
+def test_one_number_for_all_points_is_reported_as_a_shape_error():
+    result = run("sdf_sphere", lambda p, r: np.linalg.norm(p) - r)   # norm of the whole array
+    flat = " ".join(result.message.split())
+    assert not result.passed and "shape ()" in flat and "axis=-1" in flat
+
+
+def test_changing_the_input_in_place_is_reported():
+    def moves_p(p, offset):
+        p -= offset
+        return p
+
+    result = run("op_translate", moves_p)
+    flat = " ".join(result.message.split())
+    assert not result.passed and "changed its input `p` in place" in flat
+
+
+def test_march_returning_one_array_is_reported():
+    result = run("march", lambda *args: M.march(*args)[0])
+    assert not result.passed and "three arrays (t, steps, hit)" in " ".join(result.message.split())
+
+
+def test_march_with_finite_t_on_misses_is_reported():
+    def finite_misses(*args):
+        t, steps, hit = M.march(*args)
+        return np.where(hit, t, 0.0), steps, hit
+
+    result = run("march", finite_misses)
+    assert not result.passed and "t = inf" in " ".join(result.message.split())
+
+
+def test_first_failing_input_is_quoted_with_expected_and_got():
+    result = run("sdf_sphere", lambda p, r: S.length(p) - r + 0.25)
+    flat = " ".join(result.message.split())
+    assert "For p = (" in flat and "radius = " in flat and "marchlab gives" in flat
+    assert "off by the same constant 0.25" in flat
+
+
+def test_checks_are_deterministic_for_a_seed():
+    wrong = lambda p, big, small: S.sdf_torus(p, big, small) * 1.5
+    assert run("sdf_torus", wrong).message == run("sdf_torus", wrong).message
+    assert check.sdf_torus(wrong, seed=1).message != check.sdf_torus(wrong, seed=2).message
+
+
+def test_a_correct_rewrite_passes_within_the_tolerance():
+    # The same formulas, written differently from reference_cpu (order of operations differs).
+    def torus(p, big, small):
+        ring = np.hypot(p[:, 0], p[:, 2]) - big
+        return np.sqrt(ring ** 2 + p[:, 1] ** 2) - small
+
+    def blinn(n, l, v, shininess):
+        h = normalize(l + v)
+        lobe = np.clip(np.einsum("ij,ij->i", n, h), 0, None) ** shininess
+        return np.where(np.einsum("ij,ij->i", n, l) > 0, lobe, 0.0)
+
+    for name, function in (("sdf_torus", torus), ("specular_blinn_phong", blinn)):
+        result = run(name, function)
+        assert result.passed and result.max_error <= graphics.TOLERANCE
+
+
+# --- fastest_backend (marchlab/render.py) ------------------------------------------------------
+
+def test_fastest_backend_is_the_first_working_of_gpu_opencl_numpy():
+    working = [b for b in ("gpu", "opencl") if render_module.backend_problem(b) is None]
+    expected = working[0] if working else "numpy"
+    assert render_module.fastest_backend() == expected
+
+
+@pytest.mark.parametrize("broken, expected", [((), "gpu"), (("gpu",), "opencl"),
+                                              (("gpu", "opencl"), "numpy")])
+def test_fastest_backend_skips_backends_with_a_problem(broken, expected, monkeypatch):
+    monkeypatch.setattr(render_module, "backend_problem",
+                        lambda b: "missing here" if b in broken else None)
+    render_module.fastest_backend.cache_clear()
+    try:
+        assert render_module.fastest_backend() == expected
+    finally:
+        render_module.fastest_backend.cache_clear()
+
+
+def test_fastest_backend_asks_only_once(monkeypatch):
+    asked = []
+    monkeypatch.setattr(render_module, "backend_problem", lambda b: asked.append(b) or None)
+    render_module.fastest_backend.cache_clear()
+    try:
+        assert render_module.fastest_backend() == render_module.fastest_backend() == "gpu"
+        assert asked == ["gpu"]
+    finally:
+        render_module.fastest_backend.cache_clear()
