@@ -1,6 +1,8 @@
 # The README's two commands, for a fresh Debian machine:
 #   make demo   set up .venv, install marchlab, render the classroom scene to out/classroom.png
 #   make test   set up .venv with the test extras and run the whole suite
+# and the documentation site:
+#   make docs   run every lesson and build the site into docs/_build/html (warnings are errors)
 # System packages the backends need are installed with apt when missing (root or sudo).
 
 PYTHON ?= python3
@@ -12,13 +14,18 @@ BIN := $(VENV)/bin
 # kernels on some CPUs ("unknown target CPU 'generic'"), Debian's can.
 SYSTEM_PACKAGES := libegl1 libegl-mesa0 libgl1-mesa-dri pocl-opencl-icd ocl-icd-libopencl1
 
-.PHONY: demo test system-packages clean
+.PHONY: demo test docs system-packages clean
 
 demo: $(VENV)/.installed
 	$(BIN)/marchlab render classroom -o out/classroom.png
 
 test: $(VENV)/.installed-test
 	$(BIN)/python -m pytest
+
+# The test environment holds the docs extra and everything the lessons import, which the
+# site executes (sphinx-build -D nb_execution_mode=off skips that, as tests/test_docs_site.py does).
+docs: $(VENV)/.installed-test
+	$(BIN)/python -m sphinx -W --keep-going -b html docs docs/_build/html
 
 system-packages:
 	@if ! command -v dpkg-query >/dev/null; then \

@@ -3,7 +3,7 @@
 ``physics.simulate(world, seconds, backend="gpu")`` steps through a `GpuStepper`: the world's
 state is uploaded once into shader storage buffers (std430), stepped there, and read back into
 the `World` only at the steps a `Trajectory` records. The shader, glsl/physics_step.glsl,
-runs the CPU step's stages as separate dispatches, with the CPU's function names:
+runs the CPU step's stages as separate dispatches, with the CPU's function names::
 
     begin_step           integrate_velocities, find_contacts, warm_start
     collide_count/apply  each collision sweep of solve_simultaneous (mass split among the

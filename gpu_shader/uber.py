@@ -5,7 +5,7 @@ program is the other design (source 002's single shader with an ``if`` per techn
 text, the same for every scene, holding every primitive, light kind, shading mode, shadow
 mode, fog, background, checker and normal stencil, each chosen at run time by values in the
 parameter block. The scene becomes tables of rows (the layout is written into the program as
-``#define``s, see `LAYOUT`):
+``#define`` lines, see `LAYOUT`)::
 
     header    (private copy P)  camera, settings, mode codes, the normal stencil
     heat      3 rows a segment  the `steps` colour ramp of marchlab/colormaps.py

@@ -26,6 +26,8 @@ DOC = Path(__file__).resolve().parent.parent / "docs" / "scene-format.md"
 def type_name(hint) -> str:
     """A field's type as a scene-file author thinks of it."""
     origin, args = typing.get_origin(hint), typing.get_args(hint)
+    if hint is bool:
+        return "boolean"
     if hint is float:
         return "number"
     if hint is int:
@@ -52,6 +54,8 @@ def default_text(f: dataclasses.Field) -> str:
     if f.default is not dataclasses.MISSING:
         if f.default is None:
             return "absent"
+        if isinstance(f.default, bool):
+            return f"`{'true' if f.default else 'false'}`"
         return f"`{json.dumps(f.default) if isinstance(f.default, str) else show(f.default)}`"
     if f.default_factory is not dataclasses.MISSING:
         return "see below"
@@ -88,7 +92,7 @@ def reference() -> str:
     out += ["### `[[objects]]`", "",
             "Every object table has a `type`. Any object may also carry the shorthand keys "
             "`position` (array of 3 numbers), `rotation` (Euler angles in degrees) and `scale` "
-            "(a positive number); see *Transforms* above.", ""]
+            "(a positive number); see *The SDF tree* above.", ""]
     for kind, cls in node_kinds().items():
         out += section(f'`type = "{kind}"`', cls)
     out += section("`[physics]`", PhysicsSettings)

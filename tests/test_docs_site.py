@@ -1,0 +1,127 @@
+"""The documentation site builds with warnings as errors and has the pages a course needs.
+
+One Sphinx build (about 30 s on two cores) into a temporary folder, with the lessons'
+execution switched off: the notebooks are executed by their own tests, `make docs` runs them
+for the site. Every other test reads the HTML of that build.
+"""
+
+from __future__ import annotations
+
+import html
+import importlib
+import pkgutil
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from marchlab import shapes
+from marchlab.cli import build_parser
+from marchlab.scene import RenderSettings
+
+pytest.importorskip("sphinx", reason="the docs extra is not installed: pip install -e '.[docs]'")
+pytest.importorskip("myst_nb", reason="the docs extra is not installed: pip install -e '.[docs]'")
+
+ROOT = Path(__file__).resolve().parent.parent
+PACKAGES = ("marchlab", "reference_cpu", "physics", "gpu_shader")
+MATHS = ("sphere-tracing", "phong", "shadows", "reflections", "impulses", "equivalence")
+
+
+@pytest.fixture(scope="module")
+def build(tmp_path_factory) -> subprocess.CompletedProcess:
+    """The site built as `make docs` builds it (-W --keep-going), without running lessons.
+
+    --keep-going writes every page even when a warning fails the build, so the tests of the
+    pages below still say what they find; the first test is the one about warnings.
+    """
+    out = tmp_path_factory.mktemp("site")
+    result = subprocess.run(
+        [sys.executable, "-m", "sphinx", "-W", "--keep-going", "-b", "html",
+         "-D", "nb_execution_mode=off", "-d", str(out / "doctrees"),
+         str(ROOT / "docs"), str(out / "html")],
+        capture_output=True, text=True, timeout=600)
+    result.html = out / "html"
+    return result
+
+
+@pytest.fixture(scope="module")
+def site(build) -> Path:
+    if not (build.html / "index.html").is_file():
+        pytest.fail(f"the site was not built:\n{build.stderr[-6000:]}")
+    return build.html
+
+
+def text_of(page: Path) -> str:
+    """The visible text of an HTML page, tags removed."""
+    return html.unescape(re.sub(r"<[^>]+>", "", page.read_text()))
+
+
+def subcommands() -> dict[str, object]:
+    parser = build_parser()
+    (action,) = [a for a in parser._actions if a.__class__.__name__ == "_SubParsersAction"]
+    return dict(action.choices)
+
+
+def test_site_builds_with_warnings_as_errors_and_none_is_raised(build):
+    assert build.returncode == 0, (f"sphinx-build -W failed (exit {build.returncode}):\n"
+                                   + build.stderr[-6000:])
+
+
+def test_site_has_its_front_pages_and_the_two_commands(site):
+    for page in ("index", "getting-started", "lessons", "cli", "scene-format", "api/index",
+                 "sources", *MATHS):
+        assert (site / f"{page}.html").is_file(), page
+    start = text_of(site / "getting-started.html")
+    assert "make demo" in start and "make test" in start and "make docs" in start
+
+
+def test_cli_reference_has_a_section_per_subcommand_with_every_option(site):
+    page = (site / "cli.html").read_text()
+    text = text_of(site / "cli.html")
+    for name, sub in subcommands().items():
+        assert f'id="cli-{name}"' in page, f"no section for marchlab {name}"
+        for action in sub._actions:
+            for option in action.option_strings:
+                if option not in ("-h", "--help"):
+                    assert option in text, f"marchlab {name} {option} is not documented"
+
+
+def test_api_reference_documents_every_module_and_reference_cpu_march(site):
+    for package in PACKAGES:
+        page = (site / "api" / f"{package}.html").read_text()
+        root = importlib.import_module(package)
+        names = [package] + [m.name for m in pkgutil.walk_packages(root.__path__, f"{package}.")]
+        for name in names:
+            assert f'id="module-{name}"' in page, f"{name} is missing from api/{package}.html"
+    march = (site / "api" / "reference_cpu.html").read_text()
+    assert 'id="reference_cpu.march.march"' in march
+
+
+def test_maths_pages_link_to_the_functions_they_describe(site):
+    links = {"sphere-tracing": "reference_cpu.march.march",
+             "phong": "reference_cpu.shading.shade_phong",
+             "shadows": "reference_cpu.shadows.soft_shadow",
+             "reflections": "reference_cpu.render.Tracer.lit_color",
+             "impulses": "physics.impulses.collision_impulse",
+             "equivalence": "marchlab.compare.failures"}
+    for page, target in links.items():
+        package = target.split(".")[0]
+        assert f'href="api/{package}.html#{target}"' in (site / f"{page}.html").read_text(), page
+
+
+def test_scene_field_reference_on_the_site_covers_every_node_and_render_setting(site):
+    text = text_of(site / "scene-format.html")
+    for kind in shapes.node_kinds():
+        assert f'type = "{kind}"' in text, kind
+    for name in RenderSettings.__dataclass_fields__:
+        assert name in text, name
+
+
+def test_every_lesson_notebook_is_rendered_and_listed(site):
+    lessons = sorted((ROOT / "lessons").glob("*.ipynb"))
+    index = (site / "lessons.html").read_text()
+    for notebook in lessons:
+        assert (site / "lessons" / f"{notebook.stem}.html").is_file(), notebook.name
+        assert f'href="lessons/{notebook.stem}.html"' in index, notebook.name
