@@ -13,7 +13,8 @@ does to the solid (the set where the distance is <= 0):
 - an intersection's solid is inside each child's: the smallest is kept;
 - a subtraction's solid is inside its first child's;
 - Quilez's smooth union subtracts at most k/4 from min(d1, d2) (at h = 1/2), so its solid
-  is within k/4 of the union's: the enclosing sphere grows by k/4; the smooth intersection
+  is within k/4 of the union's, and a fold over n children within (n - 1) k/4: the enclosing
+  sphere grows by that much; the smooth intersection
   and subtraction only add to the distance, so they keep the sharp rules;
 - transforms move, turn and scale the sphere; limited repetition encloses every copy.
 
@@ -83,7 +84,9 @@ def bounding_sphere(node: Node) -> Sphere_:
             if any(part is None for part in parts):
                 return None
             centre, radius = enclosing_sphere(parts)
-            return centre, radius + (node.k / 4 if isinstance(node, SmoothUnion) else 0.0)
+            # Each of the n - 1 smooth minimums of the fold may dig up to k/4 further.
+            dig = node.k / 4 * (len(parts) - 1) if isinstance(node, SmoothUnion) else 0.0
+            return centre, radius + dig
         case Intersection() | SmoothIntersection():
             parts = [s for s in map(bounding_sphere, node.children) if s is not None]
             return min(parts, key=lambda s: s[1]) if parts else None

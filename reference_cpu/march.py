@@ -86,7 +86,8 @@ def march(origins, directions, sdf, max_steps, epsilon, max_distance, observe=No
         relax = Relaxation(relaxation, omega, n, dtype)
 
     for step in range(1, max_steps + 1):
-        dist = np.abs(scene_sdf(o + t[:, None] * d)[0])
+        signed = scene_sdf(o + t[:, None] * d)[0]
+        dist = np.abs(signed)
         if observe is not None:
             observe(index[live], t[live], dist[live], step)
         if relax is None:
@@ -95,7 +96,7 @@ def march(origins, directions, sdf, max_steps, epsilon, max_distance, observe=No
             finished = arrived | (live & (t_next > limit))
         else:
             # A step that may have skipped a surface is taken back; that point decides nothing.
-            t_next, valid = relax.step(t, dist)
+            t_next, valid = relax.step(t, signed)
             arrived = live & valid & (dist < eps)
             finished = arrived | (live & valid & (t + dist > limit))
         if finished.any():

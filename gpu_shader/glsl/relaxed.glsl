@@ -11,6 +11,7 @@ Hit march(vec3 origin, vec3 direction, real limit)
     precise real t = 0.0;
     real t_prev = 0.0;          // the last point that was checked, and its distance
     real r_prev = 0.0;
+    bool inside_prev = false;   // the distance at t_prev was negative
     real last_step = 0.0;       // t - t_prev
 #if RELAXATION_AUTO
     real omega = 1.0;           // 2 / (1 - slope), from the averaged slope
@@ -22,10 +23,12 @@ Hit march(vec3 origin, vec3 direction, real limit)
     int step;
     for (step = 1; step <= MAX_STEPS; step++) {
         precise vec3 p = origin + t * direction;
-        r = abs(march_sdf(p, objects));
-        if (r_prev + r < last_step) {
-            // The empty spheres around t_prev and t leave a gap where a surface may hide:
-            // go back to the plain step from t_prev. This point decides nothing.
+        real f = march_sdf(p, objects);
+        r = abs(f);
+        if (r_prev + r < last_step || (last_step > r_prev && (f < 0.0) != inside_prev)) {
+            // The empty spheres around t_prev and t leave a gap where a surface may hide,
+            // or the relaxed step crossed one: go back to the plain step from t_prev. This
+            // point decides nothing.
             t = t_prev + r_prev;
             last_step = r_prev;
             omega = 1.0;
@@ -48,6 +51,7 @@ Hit march(vec3 origin, vec3 direction, real limit)
 #endif
         t_prev = t;
         r_prev = r;
+        inside_prev = f < 0.0;
         last_step = omega * r;
         t = t + last_step;
     }
