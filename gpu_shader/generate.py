@@ -22,13 +22,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from marchlab.bounds import object_bounds
 from marchlab.camera import camera_basis
 from marchlab.colormaps import HEAT_COLORS, HEAT_STOPS
 from marchlab.errors import MarchlabError
 from marchlab.scene import DirectionalLight, PointLight, Scene, SpotLight
 from marchlab.shapes import primitives
-from reference_cpu.culling import MAX_CULLED
+from reference_cpu.culling import culled_bounds
 from reference_cpu.normals import STENCILS
 from reference_cpu.relaxation import SLOPE_WEIGHT
 
@@ -93,7 +92,7 @@ class _Generator:
         bounds = None
         if self.s.bounding_spheres:
             self.features.add("bounding_spheres")
-            bounds = object_bounds(self.scene.objects, 2 * self.s.epsilon)[:MAX_CULLED]
+            bounds = culled_bounds(self.scene.objects, self.s.epsilon)
         sdf_source, sdf_used = scene_sdf_code(self.scene.objects, self.block, bounds)
         self.features |= sdf_used
         parts = [

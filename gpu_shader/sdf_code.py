@@ -182,7 +182,7 @@ def scene_sdf_code(objects, block: ParameterBlock,
     """Source of ``scene_sdf``, ``scene_object_id`` and the marches' ``ray_objects`` and
     ``march_sdf``, and the library functions they use.
 
-    ``bounds``, the list of `marchlab.bounds.object_bounds`, turns on bounding-sphere
+    ``bounds``, the list of `reference_cpu.culling.culled_bounds`, turns on bounding-sphere
     culling; None writes a ``march_sdf`` that is ``scene_sdf``.
     """
     root = scene_root(objects)

@@ -28,14 +28,13 @@ import time
 import numpy as np
 
 from marchlab.bodies import rendered_scene
-from marchlab.bounds import object_bounds
 from marchlab.camera import camera_basis
 from marchlab.colormaps import HEAT_COLORS, HEAT_STOPS
 from marchlab.errors import MarchlabError
 from marchlab.scene import DirectionalLight, PointLight, Scene, SpotLight
 from marchlab.shapes import (Box, Capsule, CappedCylinder, Cone, Plane, Rotate, RoundBox, Scale,
                              Sphere, Torus, Translate)
-from reference_cpu.culling import MAX_CULLED
+from reference_cpu.culling import MAX_CULLED, culled_bounds
 from reference_cpu.normals import STENCILS
 
 from .context import renderer_name
@@ -64,7 +63,7 @@ CODES |= {f"SHADOWS_{m.upper()}": c for c, m in enumerate(SHADOWS)}
 CODES |= {f"BACKGROUND_{m.upper()}": c for c, m in enumerate(BACKGROUNDS)}
 
 # Capacities: the program declares a fixed block, so these are the most a scene may have.
-MAX_OBJECTS = 32                   # = reference_cpu.culling.MAX_CULLED: one culling bit each
+MAX_OBJECTS = MAX_CULLED           # one culling bit each
 MAX_LIGHTS = 8
 MAX_TRANSFORMS = 4                 # transforms above one primitive
 MAX_STENCIL = max(len(k) for k in STENCILS.values())
@@ -130,7 +129,7 @@ def uber_program(scene: Scene, width: int, height: int) -> Program:
         rows[at:at + LIGHT_STRIDE] = _light_rows(light)
     bits = {}
     if scene.render.bounding_spheres:
-        bounds = object_bounds(scene.objects, 2 * scene.render.epsilon)[:MAX_CULLED]
+        bounds = culled_bounds(scene.objects, scene.render.epsilon)
         bits = {index: (bit, [*centre, radius])
                 for bit, (index, centre, radius) in enumerate(bounds)}
     for i, node in enumerate(scene.objects):

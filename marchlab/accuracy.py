@@ -140,7 +140,7 @@ def timed_render(scene, width, height, backend, precision, repeat):
 
 def measure(name, scene, truth, gold, backend, precision, setting, change, size, repeat) -> Row:
     """Render one configuration and measure it against ``truth`` and ``gold``."""
-    from reference_cpu.scene_sdf import build_scene_sdf
+    from reference_cpu.truth import surface_distances
     from .camera import camera_rays
     width, height = size
     seconds, frame = timed_render(configured(scene, change), width, height, backend, precision,
@@ -148,8 +148,8 @@ def measure(name, scene, truth, gold, backend, precision, setting, change, size,
     both = frame.hit & truth.hit
     depth_error = np.abs(frame.depth[both].astype(np.float64) - truth.depth[both])
     origin, directions = camera_rays(scene.camera, width, height, np.float64)
-    points = origin + frame.depth[frame.hit].astype(np.float64)[:, None] * directions[frame.hit]
-    surface = np.abs(build_scene_sdf(scene.objects, np.float64)(points)[0])
+    surface = surface_distances(scene.objects, origin, directions[frame.hit],
+                                frame.depth[frame.hit])
     differ = frame.hit != truth.hit
     band = dilate(boundary(truth.hit.astype(np.int64)), 1)
     cosine = np.clip(np.sum(frame.normal[both].astype(np.float64) * truth.normal[both], axis=-1),

@@ -63,16 +63,23 @@ def positive_number(text: str) -> float:
     return value
 
 
-def grid_resolution(text: str) -> int:
-    """``"128"`` -> 128: marching-cubes cells, from 2 to `MAX_RESOLUTION`."""
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if not 2 <= value <= MAX_RESOLUTION:
-        raise argparse.ArgumentTypeError(
-            f"expected an integer from 2 to {MAX_RESOLUTION} (got {text!r})")
-    return value
+def integer_in(low: int, high: int | None, expected: str):
+    """An argparse type: an integer from ``low`` to ``high`` (None: no upper limit), else
+    "expected ``expected``"."""
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            value = low - 1
+        if not (low <= value and (high is None or value <= high)):
+            raise argparse.ArgumentTypeError(f"expected {expected} (got {text!r})")
+        return value
+    return parse
+
+
+# marching-cubes cells of `marchlab truth`; timed frames of `marchlab bench accuracy`
+grid_resolution = integer_in(2, MAX_RESOLUTION, f"an integer from 2 to {MAX_RESOLUTION}")
+positive_int = integer_in(1, None, "a positive integer")
 
 
 def _attach_dashed_values(argv: list[str]) -> list[str]:
@@ -201,16 +208,6 @@ def build_parser() -> Parser:
     q.set_defaults(func=cmd_bench_accuracy)
     return parser
 
-
-def positive_int(text: str) -> int:
-    """``"3"`` -> 3, refusing zero, negative and non-integer values."""
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected a positive integer (got {text!r})")
-    return value
 
 
 def main(argv: list[str] | None = None) -> int:

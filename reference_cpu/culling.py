@@ -46,7 +46,7 @@ class BoundingSpheres:
 
     @classmethod
     def of(cls, objects, epsilon: float, dtype) -> BoundingSpheres:
-        bounds = object_bounds(objects, 2 * epsilon)[:MAX_CULLED]
+        bounds = culled_bounds(objects, epsilon)
         as_dtype = lambda values: np.asarray(values, dtype=np.float64).astype(dtype)
         return cls(len(objects), np.array([i for i, _, _ in bounds], dtype=np.intp),
                    as_dtype([c for _, c, _ in bounds]).reshape(-1, 3),
@@ -60,6 +60,12 @@ class BoundingSpheres:
             met[:, index] = ray_meets_sphere(origins, directions, self.centre[k],
                                              self.radius[k])
         return met
+
+
+def culled_bounds(objects, epsilon: float) -> list[tuple[int, np.ndarray, float]]:
+    """The spheres every backend culls with: `marchlab.bounds.object_bounds` widened by
+    2 epsilon, the first `MAX_CULLED` of them."""
+    return object_bounds(objects, 2 * epsilon)[:MAX_CULLED]
 
 
 def ray_meets_sphere(origins, directions, centre, radius):

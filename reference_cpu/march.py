@@ -21,6 +21,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .relaxation import Relaxation
+
 
 def march(origins, directions, sdf, max_steps, epsilon, max_distance, observe=None, *,
           relaxation="none", omega=1.2, bounds=None):
@@ -82,7 +84,6 @@ def march(origins, directions, sdf, max_steps, epsilon, max_distance, observe=No
         scene_sdf = sdf
     relax = None
     if relaxation != "none":
-        from .relaxation import Relaxation
         relax = Relaxation(relaxation, omega, n, dtype)
 
     for step in range(1, max_steps + 1):

@@ -138,12 +138,18 @@ def ground_truth(scene: Scene, width: int, height: int, method: str = "analytic"
                  measured_error=measured[0], measured_error_p99=measured[1])
 
 
+def surface_distances(objects, origin, directions, t) -> np.ndarray:
+    """|sdf| at the hit points origin + t d (float64 scene SDF): each point's distance to the
+    true surface where the SDF is exact, a lower bound on it elsewhere. (N,) ndarray."""
+    points = origin + np.asarray(t, np.float64)[:, None] * directions
+    return np.abs(build_scene_sdf(objects, np.float64)(points)[0])
+
+
 def measured_errors(objects, origin, directions, t) -> tuple[float, float]:
-    """(max, 99th percentile) of |sdf| at the hit points origin + t d (float64 scene SDF)."""
+    """(max, 99th percentile) of `surface_distances`."""
     if len(t) == 0:
         return 0.0, 0.0
-    distance, _ = build_scene_sdf(objects, np.float64)(origin + t[:, None] * directions)
-    error = np.abs(distance)
+    error = surface_distances(objects, origin, directions, t)
     return float(error.max()), float(np.percentile(error, 99))
 
 
