@@ -2,7 +2,8 @@
 
 A student writes, say, ``sdf_torus`` in a notebook and calls ``marchlab.check.sdf_torus(fn)``:
 the check compares it with marchlab's own function on random inputs and prints what is wrong
-(or that it passed). Graphics exercises live in `graphics`, physics ones in `physics`.
+(or that it passed). Graphics exercises live in `graphics` (which gathers one module per
+lesson topic: `sdf`, `operators`, `marching`, `shading`, `shadows`), physics ones in `physics`.
 """
 
 from .graphics import *   # noqa: F401,F403
