@@ -1,31 +1,40 @@
 """Speed against error: sweep the march settings on every backend and measure both, in one run.
 
 For each scene, backend, precision and setting, one `Row`: the median time per frame, the steps
-per pixel, and the errors against independent truth (`reference_cpu.truth`):
+per pixel, and the errors against independent truth (`reference_cpu.truth`): the analytic
+truth for the scenes made only of spheres, boxes and planes, the Embree truth (meshes
+ray-cast by Intel Embree) for the others. Each scene's truth is built once (`scene_truth`),
+with its own error (`marchlab.accuracy_truth`), and every row says which truth it was
+measured against:
 
 - **depth**: |t - t_true| where both hit, and the hit point's distance to the true surface,
-  |sdf(p)| of the scene's float64 SDF (exact for the unions of spheres, boxes and planes the
-  analytic truth handles);
+  |sdf(p)| of the scene's float64 SDF (the *surface* error: it needs no truth at all);
 - **hit/miss**: pixels whose classification differs from the truth's, and how many of them
-  lie off the 1-pixel band around the truth's silhouettes (where a tangent ray may go either way);
-- **normal**: the angle to the true normal;
+  lie off the band around the truth's silhouettes (where a tangent ray may go either way,
+  widened by the truth's own error in pixels);
+- **normal**: the angle to the true normal (the Embree truth's is the float64 SDF's gradient
+  at its hit point, not the mesh's facet);
 - **colour**: max |Δ| against a "gold" render (NumPy float64, epsilon 1e-6, 4096 steps):
-  colour has no analytic truth, so the gold render stands in.
+  colour has no truth, so the gold render stands in.
 
-`pareto` keeps the settings no other beats on both time and error; `recommend` names, per
-backend, the fastest setting whose errors stay within `TOLERANCES`. ``marchlab bench accuracy``
-runs it and writes docs/speed-vs-error.md with its plots.
+An error that lies, pixel by pixel, within the truth's own error (`SceneTruth`) is marked
+(`within_truth`): the truth cannot tell it from 0. `pareto` keeps the settings no other beats
+on both time and error; `recommend` names, per backend, the fastest setting whose errors stay
+within `TOLERANCES`. ``marchlab bench accuracy`` runs it and writes docs/speed-vs-error.md with
+its plots (`marchlab.accuracy_report`).
 """
 
 from __future__ import annotations
 
 import dataclasses
-import math
 import time
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from .accuracy_truth import (TRUTH_RESOLUTION, SceneTruth, angle_deg, p99, scene_truth,
+                             statistic, truth_method, within_truth)
+from .bodies import rendered_scene
 from .compare import dilate, boundary
 from .render import backend_problem, render
 from .scene import Scene
@@ -51,6 +60,7 @@ OTHER = {
     "tetrahedron normals": {"normal_method": "tetrahedron"},
 }
 
+# --- The scenes ------------------------------------------------------------------------------
 
 def analytic_scenes() -> dict[str, Scene]:
     """Scenes the analytic truth can trace exactly: the bundled classroom, and rotated boxes
@@ -72,6 +82,20 @@ def analytic_scenes() -> dict[str, Scene]:
     return {"classroom": load_scene("classroom"), "boxes": boxes}
 
 
+def sweep_scenes() -> dict[str, Scene]:
+    """`analytic_scenes`, then every bundled scene the analytic truth cannot trace (those
+    are measured against the Embree truth, `truth_method`)."""
+    from .scenefile import bundled_scene_names, load_scene
+    scenes = analytic_scenes()
+    for name in bundled_scene_names():
+        scene = load_scene(name)
+        if truth_method(scene) == "embree":
+            scenes[name] = scene
+    return scenes
+
+
+# --- One configuration -------------------------------------------------------------------------
+
 def settings_grid() -> dict[str, dict]:
     """Label -> render-setting changes: the marching modes at each epsilon, then the others."""
     grid = {}
@@ -85,7 +109,13 @@ def settings_grid() -> dict[str, dict]:
 
 @dataclass
 class Row:
-    """One configuration's time and errors (see the module docstring)."""
+    """One configuration's time and errors (see the module docstring).
+
+    ``truth`` names the truth the errors were measured against (`SceneTruth.label`);
+    ``within_truth`` the error fields that truth cannot tell from 0 (`within_truth`, marked
+    † in the report); ``hit_changed`` the pixels whose hit/miss differs from plain sphere
+    tracing at the same epsilon on the same backend (None without that baseline in the grid).
+    """
     scene: str
     backend: str
     precision: str
@@ -106,15 +136,21 @@ class Row:
     color_p99: float
     color_max: float
     notes: list[str] = field(default_factory=list)
+    truth: str = "analytic"
+    within_truth: tuple[str, ...] = ()
+    hit_changed: int | None = None
 
     def error(self) -> float:
         """The error the Pareto frontier uses: p99 distance of hit points to the surface."""
         return self.surface_p99
 
     def within(self, tolerances=TOLERANCES) -> bool:
+        """Whether the errors are within ``tolerances``; a normal error no larger than the
+        truth's own cannot be held against the renderer."""
         return (self.surface_p99 <= tolerances["surface_p99"]
                 and self.off_band <= tolerances["off_band"]
-                and self.normal_p99_deg <= tolerances["normal_p99_deg"])
+                and (self.normal_p99_deg <= tolerances["normal_p99_deg"]
+                     or "normal_p99_deg" in self.within_truth))
 
 
 def configured(scene: Scene, change: dict) -> Scene:
@@ -138,37 +174,52 @@ def timed_render(scene, width, height, backend, precision, repeat):
     return float(np.median(times)), frame
 
 
-def measure(name, scene, truth, gold, backend, precision, setting, change, size, repeat) -> Row:
-    """Render one configuration and measure it against ``truth`` and ``gold``."""
+def measure(name, scene, reference: SceneTruth, gold, backend, precision, setting, change,
+            size, repeat):
+    """Render one configuration and measure it against ``reference`` and ``gold``.
+
+    Returns
+    -------
+    row : Row
+    hit : (H, W) bool ndarray
+        The frame's hit mask (a baseline for `Row.hit_changed`).
+    """
     from reference_cpu.truth import surface_distances
     from .camera import camera_rays
     width, height = size
+    truth = reference.truth
     seconds, frame = timed_render(configured(scene, change), width, height, backend, precision,
                                   repeat)
     both = frame.hit & truth.hit
     depth_error = np.abs(frame.depth[both].astype(np.float64) - truth.depth[both])
     origin, directions = camera_rays(scene.camera, width, height, np.float64)
-    surface = surface_distances(scene.objects, origin, directions[frame.hit],
+    surface = surface_distances(rendered_scene(scene).objects, origin, directions[frame.hit],
                                 frame.depth[frame.hit])
     differ = frame.hit != truth.hit
-    band = dilate(boundary(truth.hit.astype(np.int64)), 1)
-    cosine = np.clip(np.sum(frame.normal[both].astype(np.float64) * truth.normal[both], axis=-1),
-                     -1, 1)
-    angle = np.degrees(np.arccos(cosine))
+    angle = angle_deg(frame.normal[both].astype(np.float64), reference.normal[both])
     steps = frame.steps.astype(np.float64)
-    stat = lambda a, f: float(f(a)) if a.size else 0.0
-    p99 = lambda a: np.percentile(a, 99)
-    return Row(
+    errors = {"depth_mean": statistic(depth_error, np.mean), "depth_p99": statistic(depth_error, p99),
+              "depth_max": statistic(depth_error, np.max),
+              "normal_p99_deg": statistic(angle, p99), "normal_max_deg": statistic(angle, np.max)}
+    marked = within_truth({"depth": depth_error, "normal": angle},
+                          {"depth": reference.depth_error[both],
+                           "normal": reference.normal_error_deg[both]})
+    off_band = differ & ~reference.band
+    if reference.band_px and not off_band.any():
+        # Misclassified pixels that only the truth's wider band excuses are marked too.
+        if (differ & ~dilate(boundary(truth.hit.astype(np.int64)), 1)).any():
+            marked += ("off_band",)
+    row = Row(
         scene=name, backend=backend, precision=precision, setting=setting, ms=1000 * seconds,
         steps_mean=float(steps.mean()), steps_p99=float(np.percentile(steps, 99)),
-        depth_mean=stat(depth_error, np.mean), depth_p99=stat(depth_error, p99),
-        depth_max=stat(depth_error, np.max), surface_mean=stat(surface, np.mean),
-        surface_p99=stat(surface, p99), surface_max=stat(surface, np.max),
-        misclassified=int(differ.sum()), off_band=int((differ & ~band).sum()),
-        normal_p99_deg=stat(angle, p99), normal_max_deg=stat(angle, np.max),
+        **errors, surface_mean=statistic(surface, np.mean), surface_p99=statistic(surface, p99),
+        surface_max=statistic(surface, np.max),
+        misclassified=int(differ.sum()), off_band=int(off_band.sum()),
         color_p99=float(np.percentile(np.abs(frame.color - gold.color).max(axis=-1), 99)),
         color_max=float(np.abs(frame.color - gold.color).max()),
-        notes=[] if np.isfinite(frame.color).all() else ["non-finite colour"])
+        notes=[] if np.isfinite(frame.color).all() else ["non-finite colour"],
+        truth=reference.label(), within_truth=marked)
+    return row, frame.hit
 
 
 def backends_present() -> list[tuple[str, str]]:
@@ -181,24 +232,42 @@ def backends_present() -> list[tuple[str, str]]:
     return pairs
 
 
+def baseline_setting(change: dict, scene: Scene) -> str:
+    """The label of plain sphere tracing at the epsilon of ``change`` (as `settings_grid`)."""
+    return f"plain, eps {change.get('epsilon', scene.render.epsilon):g}"
+
+
 def sweep(scenes: dict[str, Scene], size=(160, 120), repeat=3, grid=None, pairs=None,
-          progress=None) -> list[Row]:
-    """Every scene x backend/precision x setting of ``grid`` (default `settings_grid`)."""
-    from reference_cpu.truth import ground_truth
+          progress=None, truths: dict | None = None,
+          resolution: int = TRUTH_RESOLUTION) -> list[Row]:
+    """Every scene x backend/precision x setting of ``grid`` (default `settings_grid`).
+
+    ``truths`` caches each scene's `SceneTruth` by name: the ones missing are built (at
+    ``resolution`` for the Embree truth) and added, so one run builds each truth once.
+    """
     grid = settings_grid() if grid is None else grid
     pairs = backends_present() if pairs is None else pairs
+    truths = {} if truths is None else truths
     rows = []
     for name, scene in scenes.items():
-        truth = ground_truth(scene, *size, method="analytic")
+        if name not in truths:
+            truths[name] = scene_truth(scene, *size, resolution=resolution)
         gold = gold_render(scene, *size)
         for backend, precision in pairs:
+            hits = {}
             for setting, change in grid.items():
-                rows.append(measure(name, scene, truth, gold, backend, precision, setting,
-                                    change, size, repeat))
+                row, hits[setting] = measure(name, scene, truths[name], gold, backend,
+                                             precision, setting, change, size, repeat)
+                baseline = hits.get(baseline_setting(change, scene))
+                if baseline is not None:
+                    row.hit_changed = int((baseline != hits[setting]).sum())
+                rows.append(row)
                 if progress is not None:
                     progress(rows[-1])
     return rows
 
+
+# --- Choosing ---------------------------------------------------------------------------------
 
 def pareto(rows: list[Row]) -> list[Row]:
     """The rows no other row beats on both time and `Row.error` (ties kept), fastest first."""
@@ -225,177 +294,55 @@ def recommend(rows: list[Row], tolerances=TOLERANCES) -> dict[tuple[str, str], R
     return out
 
 
+def numpy_rows(rows: list[Row], scene: str) -> dict[str, Row]:
+    """The NumPy float64 rows of ``scene`` by setting."""
+    return {r.setting: r for r in rows
+            if r.scene == scene and (r.backend, r.precision) == ("numpy", "float64")}
+
+
 def steps_saved(rows: list[Row], setting: str, baseline: str) -> dict[str, float]:
     """Per scene: 1 - mean steps of ``setting`` / mean steps of ``baseline`` (numpy float64)."""
     out = {}
     for scene in dict.fromkeys(r.scene for r in rows):
-        get = {r.setting: r for r in rows
-               if r.scene == scene and (r.backend, r.precision) == ("numpy", "float64")}
+        get = numpy_rows(rows, scene)
         if setting in get and baseline in get:
             out[scene] = 1 - get[setting].steps_mean / get[baseline].steps_mean
     return out
 
 
-def format_number(x: float) -> str:
-    if x == 0:
-        return "0"
-    if not math.isfinite(x):
-        return str(x)
-    return f"{x:.3g}" if 1e-3 <= abs(x) < 1e4 else f"{x:.1e}"
-
-
-# --- The report -------------------------------------------------------------------------------
-
-COLUMNS = [("scene", "scene"), ("backend", "backend"), ("precision", "precision"),
-           ("setting", "setting"), ("ms", "ms/frame"), ("steps_mean", "steps mean"),
-           ("steps_p99", "steps p99"), ("depth_mean", "\\|Δt\\| mean"), ("depth_p99", "\\|Δt\\| p99"),
-           ("depth_max", "\\|Δt\\| max"), ("surface_mean", "surface mean"),
-           ("surface_p99", "surface p99"), ("surface_max", "surface max"),
-           ("misclassified", "hit/miss wrong"), ("off_band", "off silhouette band"),
-           ("normal_p99_deg", "normal p99 °"), ("normal_max_deg", "normal max °"),
-           ("color_p99", "colour p99 \\|Δ\\|"), ("color_max", "colour max \\|Δ\\|")]
-
-
-def table(rows: list[Row]) -> str:
-    """The rows as one Markdown table."""
-    head = "| " + " | ".join(title for _, title in COLUMNS) + " |\n"
-    head += "| " + " | ".join("---" if i < 4 else "---:" for i in range(len(COLUMNS))) + " |\n"
-    lines = []
-    for r in rows:
-        cells = [getattr(r, key) for key, _ in COLUMNS]
-        lines.append("| " + " | ".join(c if isinstance(c, str) else
-                                       (str(c) if isinstance(c, int) else format_number(c))
-                                       for c in cells) + " |")
-    return head + "\n".join(lines) + "\n"
-
-
-def plot(rows: list[Row], scene: str, path) -> None:
-    """Time against p99 surface distance for one scene, one colour per backend, the
-    Pareto frontier of each backend drawn as a line."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(figsize=(7, 4.5), dpi=100)
-    mine = [r for r in rows if r.scene == scene]
-    for key in dict.fromkeys((r.backend, r.precision) for r in mine):
-        group = [r for r in mine if (r.backend, r.precision) == key]
-        label = f"{key[0]} {key[1]}"
-        floor = 1e-9          # a log axis cannot show 0
-        points = ax.scatter([r.ms for r in group], [max(r.error(), floor) for r in group],
-                            s=14, label=label)
-        front = pareto(group)
-        ax.plot([r.ms for r in front], [max(r.error(), floor) for r in front],
-                color=points.get_facecolor()[0], linewidth=1)
-    ax.set_xscale("log")
-    ax.set_yscale("log")
-    ax.set_xlabel("median time per frame (ms)")
-    ax.set_ylabel("p99 distance of hit points to the surface")
-    ax.set_title(f"{scene}: speed against error (lines: each backend's Pareto frontier)")
-    ax.grid(True, which="both", linewidth=0.3)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
-
-
-def write_report(rows: list[Row], markdown, image_dir, command: str, size, repeat,
-                 uber: list[dict] | None = None, devices: dict | None = None) -> list:
-    """Write the Markdown report and one plot per scene; return the paths written.
-
-    Everything is rendered into memory first and written at the end, each file atomically,
-    so an interrupted run leaves the previous report whole.
-    """
-    from pathlib import Path
-    from .files import write_atomically
-    markdown, image_dir = Path(markdown), Path(image_dir)
-    scenes = list(dict.fromkeys(r.scene for r in rows))
-    best = recommend(rows)
-    saved = steps_saved(rows, "auto, eps 0.001", "plain, eps 0.001")
-    saved_cull = steps_saved(rows, "auto + spheres, eps 0.001", "plain, eps 0.001")
-    out = ["# Speed against error", "",
-           "Generated by the command below; do not edit by hand. Every figure comes from one "
-           "run on one machine, so the times are comparable with each other (not with other "
-           "runs on this shared machine).", "", "```sh", command, "```", "",
-           f"Image size {size[0]}x{size[1]}, median of {repeat} timed frames after one "
-           "untimed (compiling) frame. Scenes: " + ", ".join(f"`{s}`" for s in scenes)
-           + " (both traced exactly by the analytic truth, `reference_cpu/truth.py`)."]
-    if devices:
-        out += ["", "Devices: " + "; ".join(f"{k}: {v}" for k, v in devices.items()) + "."]
-    out += ["", "## How to read it", "",
-            "- **|Δt|**: depth against the exact intersection where both hit. On grazing "
-            "floors a ray may stop anywhere in the epsilon shell, up to epsilon/|cos θ| "
-            "short of the surface, so this grows at the horizon.",
-            "- **surface**: the hit point's distance to the true surface (|sdf| of the "
-            "float64 SDF, exact for these scenes). Sphere tracing promises less than "
-            "epsilon; this is the error the Pareto frontier and the recommendations use.",
-            "- **hit/miss wrong**: pixels classified differently from the truth; **off "
-            "silhouette band**: those more than one pixel away from the truth's silhouettes "
-            "(a ray within epsilon of an edge may hit or miss).",
-            "- **normal**: angle to the exact normal; **colour**: against a NumPy float64 "
-            "render with epsilon 1e-6 and 4096 steps (colour has no analytic truth). "
-            "Colour max is set by checker and shadow edges, which move with the hit point; "
-            "p99 is the typical error.",
-            "", "## Fewer steps, same surface (issue 6's goal)", "",
-            "Mean SDF evaluations per pixel saved against plain sphere tracing at epsilon "
-            "1e-3 (NumPy float64; the goal is at least 25% with the hit mask unchanged and "
-            "the surface within epsilon):", "",
-            "| scene | auto relaxation | auto + bounding spheres |", "| --- | ---: | ---: |"]
-    for scene in scenes:
-        out.append(f"| {scene} | {100 * saved.get(scene, float('nan')):.1f}% | "
-                   f"{100 * saved_cull.get(scene, float('nan')):.1f}% |")
-    out += ["", "The same settings on every backend, against the truth:", "",
-            table([r for r in rows if r.setting in ("plain, eps 0.001", "auto, eps 0.001",
-                                                    "auto + spheres, eps 0.001")]),
-            "## Recommended settings", "",
-            "Per backend, the fastest setting (time summed over the scenes) whose p99 surface "
-            f"distance is at most {TOLERANCES['surface_p99']:g}, with no misclassified pixel "
-            f"off the silhouette band and p99 normal error at most "
-            f"{TOLERANCES['normal_p99_deg']:g}° on every scene:", "",
-            "| backend | precision | recommended |", "| --- | --- | --- |"]
-    for (backend, precision), setting in best.items():
-        out.append(f"| {backend} | {precision} | {setting or 'none within tolerance'} |")
-    if uber:
-        out += ["", "## A specialised shader against an uber shader", "",
-                "The gpu backend generates a shader holding only what the scene uses. The "
-                "uber shader (`gpu_shader/uber.py`) is one text for every scene: all "
-                "primitives, lights, shading modes and features, chosen at run time by "
-                "values in the parameter block (source 002 measured the same trade-off). "
-                "Same images (tests/gpu/test_uber_shader.py); times side by side:", "",
-                "| scene | specialised ms | uber ms | uber / specialised | compile ms "
-                "(specialised, uber) |", "| --- | ---: | ---: | ---: | ---: |"]
-        for u in uber:
-            out.append(f"| {u['scene']} | {u['specialised_ms']:.1f} | {u['uber_ms']:.1f} | "
-                       f"{u['ratio']:.2f}x | {u['specialised_compile_ms']:.0f}, "
-                       f"{u['uber_compile_ms']:.0f} |")
-    images = {}
-    for scene in scenes:
-        images[scene] = image_dir / f"speed-vs-error-{scene}.png"
-        front = pareto([r for r in rows if r.scene == scene])
-        relative = Path("images") / images[scene].name
-        out += ["", f"## `{scene}`", "", f"![Speed against error, {scene}]({relative})", "",
-                "Pareto frontier over all backends (no other configuration is both faster "
-                "and more accurate):", "", table(front)]
-    out += ["## Every configuration", "", table(rows)]
-    written = []
-    for scene, path in images.items():
-        path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_suffix(".tmp.png")
-        plot(rows, scene, tmp)
-        tmp.replace(path)
-        written.append(path)
-    write_atomically(markdown, ("\n".join(out) + "\n").encode())
-    written.append(markdown)
-    return written
+def embree_problem() -> str | None:
+    """Why the Embree truth cannot run here, or None."""
+    from importlib.util import find_spec
+    if find_spec("embreex") is None or find_spec("skimage") is None:
+        return "the Embree truth needs embreex and scikit-image: pip install 'marchlab[embree]'"
+    return None
 
 
 def run(markdown="docs/speed-vs-error.md", image_dir="docs/images", size=(160, 120), repeat=3,
         command="marchlab bench accuracy", quick=False, echo=print) -> list:
-    """The whole report: sweep, compare the uber shader if the gpu backend runs, write."""
-    scenes = analytic_scenes()
+    """The whole report: build each scene's truth, sweep, compare the uber shader if the gpu
+    backend runs, write."""
+    from .accuracy_report import format_number, write_report
+    scenes = sweep_scenes()
     grid = settings_grid()
-    if quick:                       # a smoke run: two settings, one scene
-        scenes = {"classroom": scenes["classroom"]}
+    resolution = TRUTH_RESOLUTION
+    if quick:                       # a smoke run: two settings, one scene of each truth
+        scenes = {k: scenes[k] for k in ("classroom", "csg")}
         grid = {k: grid[k] for k in ("plain, eps 0.001", "auto, eps 0.001")}
+        resolution = 32
+    problem = embree_problem()
+    skipped = {} if problem is None else {k: problem for k, s in scenes.items()
+                                           if truth_method(s) == "embree"}
+    if skipped:
+        scenes = {k: s for k, s in scenes.items() if k not in skipped}
+        echo(f"left out {', '.join(skipped)}: {problem}")
+    truths: dict[str, SceneTruth] = {}
+    for name, scene in scenes.items():
+        truths[name] = scene_truth(scene, *size, resolution=resolution)
+        own = truths[name].errors()
+        echo(f"truth of {name}: {truths[name].label()} in {truths[name].seconds:.1f} s, its own "
+             f"|Δt| p99 {format_number(own['depth_p99'])}, normal p99 "
+             f"{format_number(own['normal_p99_deg'])}°")
     pairs = backends_present()
     total = len(scenes) * len(grid) * len(pairs)
     done = []
@@ -406,7 +353,7 @@ def run(markdown="docs/speed-vs-error.md", image_dir="docs/images", size=(160, 1
              f"{row.ms:.1f} ms, {row.steps_mean:.1f} steps, surface p99 "
              f"{format_number(row.surface_p99)}")
 
-    rows = sweep(scenes, size, repeat, grid, pairs, progress)
+    rows = sweep(scenes, size, repeat, grid, pairs, progress, truths, resolution)
     uber, devices = None, {"numpy": "NumPy on the CPU"}
     if any(b == "opencl" for b, _ in pairs):
         from reference_cpu.opencl import device_name
@@ -423,4 +370,5 @@ def run(markdown="docs/speed-vs-error.md", image_dir="docs/images", size=(160, 1
                 echo(f"uber shader: {name}: {err}")
                 continue
             uber.append({"scene": name, **result})
-    return write_report(rows, markdown, image_dir, command, size, repeat, uber, devices)
+    return write_report(rows, markdown, image_dir, command, size, repeat, uber, devices,
+                        truths, skipped)

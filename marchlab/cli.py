@@ -204,7 +204,8 @@ def build_parser() -> Parser:
     q.add_argument("--repeat", type=positive_int, default=3, metavar="N",
                    help="timed frames per configuration (default: 3)")
     q.add_argument("--quick", action="store_true",
-                   help="one scene, two settings: check that the report can be made")
+                   help="two scenes (one per kind of truth, coarse Embree grid), two settings: "
+                        "check that the report can be made")
     q.set_defaults(func=cmd_bench_accuracy)
     return parser
 
