@@ -17,6 +17,7 @@ import itertools
 import math
 import time
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -27,8 +28,6 @@ from .errors import MarchlabError
 from .geometry import dot, rotation_matrix
 from .scene import Scene
 from .shapes import Repeat, Rotate, Scale, Translate, Union
-
-from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from reference_cpu.truth import Truth
