@@ -25,7 +25,7 @@ from .bodies import rendered_scene
 from .bounds import bounding_sphere
 from .compare import boundary, dilate
 from .errors import MarchlabError
-from .geometry import dot, rotation_matrix
+from .geometry import angle_between, dot, rotation_matrix
 from .scene import Scene
 from .shapes import Repeat, Rotate, Scale, Translate, Union
 
@@ -216,8 +216,8 @@ def sdf_gradient(sdf, points, h=GRADIENT_STEP):
 
 
 def angle_deg(a, b):
-    """Angles in degrees between unit vectors a and b, (N, 3) each: (N,)."""
-    return np.degrees(np.arccos(np.clip(dot(a, b), -1.0, 1.0)))
+    """Angles in degrees between vectors a and b, (N, 3) each: (N,) (`geometry.angle_between`)."""
+    return np.degrees(angle_between(a, b))
 
 
 def unit(v):
@@ -237,8 +237,8 @@ def silhouette_band_px(truth: Truth, directions) -> int:
     edge = boundary(truth.hit.astype(np.int64)) & truth.hit
     if not edge.any() or truth.error_bound <= 0:
         return 0
-    across = np.arccos(np.clip(dot(directions[:, 1:], directions[:, :-1]), -1, 1)).min()
-    down = np.arccos(np.clip(dot(directions[1:], directions[:-1]), -1, 1)).min()
+    across = angle_between(directions[:, 1:], directions[:, :-1]).min()
+    down = angle_between(directions[1:], directions[:-1]).min()
     pixels = truth.error_bound / (truth.depth[edge].min() * min(across, down))
     return math.ceil(pixels) if pixels >= 1e-3 else 0
 

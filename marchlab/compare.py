@@ -29,6 +29,7 @@ import numpy as np
 
 from .files import write_atomically
 from .frame import Frame
+from .geometry import angle_between
 
 
 @dataclass
@@ -125,8 +126,7 @@ def compare_frames(a: Frame, b: Frame, erode: int = 2, epsilon: float | None = N
 
     ta, tb = a.depth[interior].astype(np.float64), b.depth[interior].astype(np.float64)
     na, nb = a.normal[interior].astype(np.float64), b.normal[interior].astype(np.float64)
-    # atan2(|a x b|, a . b) is accurate for small angles, where arccos(a . b) is not.
-    angle = np.arctan2(np.linalg.norm(np.cross(na, nb), axis=-1), np.sum(na * nb, axis=-1))
+    angle = angle_between(na, nb)
     ca, cb = a.color.astype(np.float64), b.color.astype(np.float64)
     color_diff = np.abs(ca - cb).max(axis=-1)
     display = np.abs(a.image().astype(np.int16) - b.image().astype(np.int16)).max(axis=-1)

@@ -20,6 +20,16 @@ def normalize(v: np.ndarray) -> np.ndarray:
     return v / np.sqrt(dot(v, v))[..., None]
 
 
+def angle_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Angles in radians between vectors a and b, (..., 3) each: (...,).
+
+    atan2(|a x b|, a . b) is accurate for small angles, where arccos(a . b) is not (near 1
+    its slope is infinite); neither vector need be of unit length.
+    """
+    c = np.cross(a, b)
+    return np.arctan2(np.sqrt(dot(c, c)), dot(a, b))
+
+
 def rotation_matrix(degrees) -> np.ndarray:
     """R = Rz(z) Ry(y) Rx(x) for Euler angles in degrees (source 000), as a float64 (3, 3).
 
