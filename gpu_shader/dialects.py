@@ -18,6 +18,8 @@ from typing import Callable
 
 import numpy as np
 
+from .library import GLSL_DIR, load_library
+
 # Structs shared by every dialect: name -> ((type, field), ...).
 STRUCTS = {
     "Hit": (("real", "t"), ("int", "steps"), ("int", "hit")),
@@ -37,6 +39,12 @@ class Dialect:
     real_dtype: np.dtype                          # precision of `real`
     entry: str                                    # the entry point file in glsl/
     finish: Callable[[str], str] = lambda source: source   # last rewrite of the whole text
+    packets: bool = False                         # one packet of rays per work-item?
+
+    def library(self, name: str):
+        """The building blocks ``glsl/<name>.glsl``, or their packet twins
+        ``glsl/<name>_packet.cl`` in a packet program."""
+        return load_library(f"{name}_packet" if self.packets else name)
 
     def literal(self, value: float) -> str:
         """A number literal that reads back as exactly ``value`` rounded to `real`."""
@@ -143,14 +151,60 @@ typedef {real}4 vec4;
 #define vec4(...) ((vec4)(__VA_ARGS__))
 #define uint(x) ((uint)(x))
 #define int(x) ((int)(x))
-// OpenCL's abs is for integers; GLSL's reflect has no OpenCL twin (GLSL spec 8.5).
+// OpenCL's abs is for integers.
 #undef abs
 #define abs fabs
-vec3 reflect(vec3 i, vec3 n)
-{{
-    return i - 2.0 * dot(n, i) * n;
-}}
 """
+
+
+# The one-ray program's reflect and normalize (the packet program has its own, in
+# glsl/packet.cl).
+_OPENCL_VECTORS = """\
+// GLSL's reflect has no OpenCL twin (GLSL spec 8.5).
+vec3 reflect(vec3 i, vec3 n)
+{
+    return i - 2.0 * dot(n, i) * n;
+}
+// normalize as the reference computes it, v / sqrt(v . v) (marchlab.geometry.normalize):
+// PoCL's builtin multiplies by rsqrt, which rounds differently a quarter of the time.
+#undef normalize
+#define normalize(v) ((v) / sqrt(dot((v), (v))))
+"""
+
+
+# The integer types of the same width as each real, for masks and ids in packets.
+_PACKET_TYPES = {"float": ("int", "uint"), "double": ("long", "ulong")}
+PACKET_LANES = 16
+
+
+def _opencl_packet_prelude(real: str) -> str:
+    """The OpenCL prelude, then the packet types and helpers of glsl/packet.cl."""
+    integer, unsigned = _PACKET_TYPES[real]
+    n = PACKET_LANES
+    types = f"""\
+// Packets: {n} rays per work-item, one vector lane each (glsl/packet.cl says how).
+#define LANES {n}
+typedef {real}{n} packet;
+typedef {integer}{n} ipacket;
+typedef {unsigned}{n} upacket;
+#define vload_packet vload{n}
+#define vstore_packet vstore{n}
+#define convert_packet convert_{real}{n}
+#define convert_ipacket convert_{integer}{n}
+#define convert_upacket convert_{unsigned}{n}
+// Lane k of a packet holds the ray of the k-th pixel of the work-item's run.
+#define LANE_INDEX ((ipacket)({", ".join(str(k) for k in range(n))}))
+"""
+    library = (GLSL_DIR / "packet.cl").read_text()
+    return _opencl_prelude(real) + types + "\n" + library
+
+
+# Struct fields in a packet program: one value per ray.
+_PACKET_FIELD_TYPES = {"real": "packet", "int": "ipacket", "vec3": "vec3p"}
+
+
+def _opencl_packet_struct(name: str, fields) -> str:
+    return _opencl_struct(name, [(_PACKET_FIELD_TYPES[t], f) for t, f in fields])
 
 
 # OpenCL C 1.2 has no program-scope variables but compile-time constants, so the parameters
@@ -203,7 +257,7 @@ def thread_parameters(source: str) -> str:
 def _opencl(real: str, dtype) -> Dialect:
     return Dialect(
         name="opencl",
-        prelude=_opencl_prelude(real),
+        prelude=_opencl_prelude(real) + _OPENCL_VECTORS,
         struct=_opencl_struct,
         to_real=lambda expr: f"(real)({expr})",
         to_int=lambda expr: f"(int)({expr})",
@@ -216,7 +270,26 @@ def _opencl(real: str, dtype) -> Dialect:
 
 OPENCL = {"float32": _opencl("float", np.float32), "float64": _opencl("double", np.float64)}
 
-DIALECTS = {"glsl": {"float32": GLSL}, "opencl": OPENCL}
+
+def _opencl_packets(real: str, dtype) -> Dialect:
+    return Dialect(
+        name="opencl-packets",
+        prelude=_opencl_packet_prelude(real),
+        struct=_opencl_packet_struct,
+        to_real=lambda expr: f"(real)({expr})",
+        to_int=lambda expr: f"(int)({expr})",
+        declare_parameters=lambda rows, fixed: _OPENCL_PARAMETERS,
+        real_dtype=np.dtype(dtype),
+        entry="main_packet.cl",
+        finish=thread_parameters,
+        packets=True,
+    )
+
+
+OPENCL_PACKETS = {"float32": _opencl_packets("float", np.float32),
+                  "float64": _opencl_packets("double", np.float64)}
+
+DIALECTS = {"glsl": {"float32": GLSL}, "opencl": OPENCL, "opencl-packets": OPENCL_PACKETS}
 
 
 def dialect(name: str, precision: str = "float32") -> Dialect:

@@ -58,8 +58,10 @@ class Library:
 
 @cache
 def load_library(name: str) -> Library:
-    """Parse ``glsl/<name>.glsl`` into its functions."""
-    text = (GLSL_DIR / f"{name}.glsl").read_text()
+    """Parse ``glsl/<name>.glsl`` (or, for OpenCL-only blocks, ``glsl/<name>.cl``) into its
+    functions."""
+    path = GLSL_DIR / f"{name}.glsl"
+    text = (path if path.exists() else GLSL_DIR / f"{name}.cl").read_text()
     blocks = _split_blocks(text)
     header, blocks = blocks[0], blocks[1:]
     names = [_DEFINITION.search(b).group(1) for b in blocks]

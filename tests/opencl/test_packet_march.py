@@ -1,0 +1,343 @@
+"""The packet marches and shadow rays compute what the scalar ones do, ray by ray, to the bit.
+
+glsl/march_packet.cl and glsl/relaxed_packet.cl are the twins of march.glsl and relaxed.glsl:
+the LANES rays of a packet step together, and a ray that stops (hit, escaped, out of steps,
+or never live) leaves a mask instead of the loop. Each ray must still go through exactly the
+scalar sequence of points, so t, the step count, the hit flag and the shadow visibility must
+equal the scalar program's at both precisions (tests/opencl/packet_twins.py runs both).
+
+The scene is a sphere resting on a tilted plane beside a thin box (a relaxed step can jump
+into or through it, so the march has to step back), written once with the scalar building
+blocks of glsl/sdf.glsl and once by hand with the packet helpers, the same operations in the
+same order. The rays are seeded random rows with the hard cases mixed in: grazing rays over
+the plane and past the sphere, rays starting inside the solids, rays that run out of
+MAX_STEPS (far targets, 64 steps), rays that escape at a small limit, hits just before and
+just after the limit, shadow rays from surface points toward lights, and rays that are not
+live (hit 0, t -1, steps 0, visibility 1). Every march runs once more with only 5 steps,
+so that most rays stop in mid-march, after whatever kind of step came last.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gpu_shader.dialects import dialect
+from gpu_shader.library import load_library
+from reference_cpu.relaxation import SLOPE_WEIGHT
+
+from packet_twins import LANES, run_twins      # tests/opencl, on the path as the tests' folder
+
+SEED = 20240612
+PRECISIONS = ["float32", "float64"]
+MAX_STEPS = 64
+EPSILON = 1e-3
+MAX_DISTANCE = 50.0
+PENUMBRA_K = 8.0
+
+# The scene: a unit sphere at (0, 1, 0) on the plane n . p = OFFSET (n = NORMAL normalised),
+# and a thin box (half-extents BOX_SIZE) at BOX_CENTRE.
+SPHERE_CENTRE, SPHERE_RADIUS = np.array([0.0, 1.0, 0.0]), 1.0
+NORMAL, OFFSET = np.array([0.1, 1.0, 0.05]), -0.1
+BOX_CENTRE, BOX_SIZE = np.array([2.5, 0.5, 0.0]), np.array([0.05, 1.0, 1.5])
+
+
+def vec3(v) -> str:
+    return "vec3({!r}, {!r}, {!r})".format(*map(float, v))
+
+
+SCENE = f"""\
+#define SPHERE_CENTRE {vec3(SPHERE_CENTRE)}
+#define SPHERE_RADIUS {SPHERE_RADIUS!r}
+#define NORMAL {vec3(NORMAL)}
+#define OFFSET {OFFSET!r}
+#define BOX_CENTRE {vec3(BOX_CENTRE)}
+#define BOX_SIZE {vec3(BOX_SIZE)}
+"""
+
+SCALAR_SCENE = SCENE + """
+real scene_sdf(vec3 p)
+{
+    real d = op_union(sdf_sphere(op_translate(p, SPHERE_CENTRE), SPHERE_RADIUS),
+                      sdf_plane(p, NORMAL, OFFSET));
+    return op_union(d, sdf_box(op_translate(p, BOX_CENTRE), BOX_SIZE));
+}
+
+// No culling in these tests: every ray sees every object.
+uint ray_objects(vec3 origin, vec3 direction)
+{
+    return 0u;
+}
+
+real march_sdf(vec3 p, uint objects)
+{
+    return scene_sdf(p);
+}
+"""
+
+# The same operations as sdf_sphere, sdf_plane, sdf_box, op_translate and op_union of
+# glsl/sdf.glsl, written inline (the plane's unit normal is a parameter: scalar in both).
+PACKET_SCENE = SCENE + """
+packet scene_sdf(vec3p p)
+{
+    packet sphere = length(sub(p, SPHERE_CENTRE)) - SPHERE_RADIUS;
+    vec3 n = NORMAL / sqrt(dot(NORMAL, NORMAL));
+    packet plane = dot(p, n) - OFFSET;
+    vec3p q = sub(abs(sub(p, BOX_CENTRE)), BOX_SIZE);
+    packet outside = length(max(q, 0.0));
+    packet inside = min(max(q.x, max(q.y, q.z)), 0.0);
+    packet box = outside + inside;
+    return min(min(sphere, plane), box);
+}
+
+upacket ray_objects(vec3p origin, vec3p direction)
+{
+    return 0u;
+}
+
+packet march_sdf(vec3p p, upacket objects)
+{
+    return scene_sdf(p);
+}
+"""
+
+# Columns: origin (3), direction (3), limit, live. The shadow functions take the same rows
+# as (origin, to_light, light_distance). Outputs: t, steps, hit, hard, soft.
+SCALAR_KERNEL = """
+__kernel void twin(__global const real* in, __global real* out)
+{
+    vec3 origin = vec3(IN(0), IN(1), IN(2));
+    vec3 direction = vec3(IN(3), IN(4), IN(5));
+    real limit = IN(6);
+    if (IN(7) == 0.0) {
+        // what the packet program must give a lane that is not live
+        OUT(0, -1.0); OUT(1, 0.0); OUT(2, 0.0); OUT(3, 1.0); OUT(4, 1.0);
+        return;
+    }
+    Hit hit = march(origin, direction, limit);
+    OUT(0, hit.t);
+    OUT(1, (real)(hit.steps));
+    OUT(2, (real)(hit.hit));
+    OUT(3, hard_shadow(origin, direction, limit));
+    OUT(4, soft_shadow(origin, direction, limit));
+}
+"""
+
+PACKET_KERNEL = """
+__kernel void twin(__global const real* in, __global real* out)
+{
+    vec3p origin = pack3(IN(0), IN(1), IN(2));
+    vec3p direction = pack3(IN(3), IN(4), IN(5));
+    packet limit = IN(6);
+    ipacket live = IN(7) != 0.0;
+    Hit hit = march(origin, direction, limit, live);
+    OUT(0, hit.t);
+    OUT(1, hit.steps);
+    OUT(2, hit.hit);
+    OUT(3, hard_shadow(origin, direction, limit, live));
+    OUT(4, soft_shadow(origin, direction, limit, live));
+}
+"""
+
+# "plain": glsl/march.glsl; the relaxed marches replace its march and keep its shadow
+# functions, as the generator puts them together (gpu_shader/generate.py, march_parts).
+# Each runs with MAX_STEPS steps, and once more with SHORT steps, where most rays stop in
+# mid-march: whatever kind of step (a relaxed one, one taken back, a plain one) came last.
+VARIANTS = {
+    "plain": ("march", {}),
+    "relaxed-fixed": ("relaxed", {"RELAXATION_AUTO": 0, "OMEGA": 1.5}),
+    "relaxed-auto": ("relaxed", {"RELAXATION_AUTO": 1, "SLOPE_WEIGHT": None}),
+}
+SHORT = 5
+RUNS = [(variant, steps) for steps in (MAX_STEPS, SHORT) for variant in VARIANTS]
+RUN_IDS = [f"{variant}-{steps}-steps" for variant, steps in RUNS]
+
+
+def sources(variant: str, precision: str, packet: bool) -> str:
+    library, _ = VARIANTS[variant]
+    suffix = "_packet" if packet else ""
+    blocks = [dialect("opencl-packets" if packet else "opencl", precision).structs()]
+    if packet:
+        blocks.append(PACKET_SCENE)
+    else:
+        blocks += [load_library("sdf").select(["sdf_sphere", "sdf_plane", "sdf_box",
+                                                "op_translate", "op_union"]), SCALAR_SCENE]
+    shadows = load_library("march" + suffix).select(["hard_shadow", "soft_shadow"],
+                                                     provided={"march"})
+    blocks += [load_library(library + suffix).select(["march"]), shadows]
+    blocks.append(PACKET_KERNEL if packet else SCALAR_KERNEL)
+    return "\n".join(blocks)
+
+
+def defines(variant: str, max_steps: int, precision: str) -> dict:
+    values = {"MAX_STEPS": max_steps, "EPSILON": EPSILON, "MAX_DISTANCE": MAX_DISTANCE,
+              "PENUMBRA_K": PENUMBRA_K}
+    for name, value in VARIANTS[variant][1].items():
+        if name == "SLOPE_WEIGHT":
+            value = dialect("opencl", precision).literal(SLOPE_WEIGHT)
+        values[name] = value
+    return values
+
+
+# --- Rays ---------------------------------------------------------------------------------
+
+def units(v) -> np.ndarray:
+    return v / np.linalg.norm(v, axis=1, keepdims=True)
+
+
+def plane_distance(p) -> np.ndarray:
+    return p @ (NORMAL / np.linalg.norm(NORMAL)) - OFFSET
+
+
+def rays(rng, n=96) -> np.ndarray:
+    """Rows (origin, direction, limit, live) of every kind, about n of each, shuffled."""
+    kinds = []
+    uniform = lambda low, high: rng.uniform(low, high, (n, 3))          # noqa: E731
+    # anywhere above the plane, in any direction
+    origin = uniform([-6, 0.2, -6], [6, 4, 6])
+    kinds.append((origin, units(rng.normal(size=(n, 3))), rng.uniform(1, 70, n)))
+    # at the sphere, from afar: through it, and tangent to within +-2% of its radius
+    origin = SPHERE_CENTRE + units(rng.normal(size=(n, 3))) * rng.uniform(3, 10, (n, 1))
+    origin[:, 1] = np.abs(origin[:, 1]) + 0.5
+    target = SPHERE_CENTRE + units(rng.normal(size=(n, 3))) * SPHERE_RADIUS
+    miss = rng.uniform(-0.02, 0.02, (n, 1)) * units(target - SPHERE_CENTRE)
+    kinds.append((origin, units(target + miss - origin), np.full(n, 40.0)))
+    # at the thin box, edge-on and face-on: the relaxed march crosses it and steps back
+    origin = uniform([-3, 0.2, -3], [-0.5, 2.5, 3])
+    target = BOX_CENTRE + rng.uniform(-1, 1, (n, 3)) * BOX_SIZE * 1.05
+    kinds.append((origin, units(target - origin), np.full(n, 30.0)))
+    # grazing the plane toward far targets: slow convergence, many run out of MAX_STEPS
+    origin = uniform([-5, 0.02, -5], [5, 0.5, 5])
+    horizontal = units(np.hstack([rng.normal(size=(n, 1)), np.zeros((n, 1)),
+                                  rng.normal(size=(n, 1))]))
+    horizontal[:, 1] = -10.0 ** rng.uniform(-4, -1.5, n)
+    kinds.append((origin, units(horizontal), np.full(n, 1e3)))
+    # parallel to the plane, well above it, far target: steps of ~0.3-1, out of steps
+    origin = uniform([-5, 0.3, 5], [5, 1.0, 8])
+    direction = np.tile([0.0, 0.0, 1.0], (n, 1)) + rng.normal(size=(n, 3)) * [0.1, 0, 0.1]
+    kinds.append((origin, units(direction) * [1, 0, 1] + [0, 0.01, 0], np.full(n, 1e3)))
+    # starting inside the sphere, the box, or under the plane
+    inside_sphere = SPHERE_CENTRE + units(rng.normal(size=(n, 3))) * rng.uniform(0, 0.95, (n, 1))
+    inside_box = BOX_CENTRE + rng.uniform(-0.9, 0.9, (n, 3)) * BOX_SIZE
+    under = uniform([-5, -1, -5], [5, -0.15, 5])
+    origin = np.where(rng.integers(3, size=(n, 1)) == 0, inside_sphere,
+                      np.where(rng.integers(2, size=(n, 1)) == 0, inside_box, under))
+    kinds.append((origin, units(rng.normal(size=(n, 3))), rng.uniform(1, 60, n)))
+    # upward, small limits: escape
+    origin = uniform([-4, 2.5, -4], [4, 4, 4])
+    direction = units(rng.normal(size=(n, 3)) * [1, 0.2, 1] + [0, 1, 0])
+    kinds.append((origin, direction, rng.uniform(0.05, 5, n)))
+    # straight at the plane, hit within a hair of the limit, before or after it
+    origin = uniform([-6, 0.5, 3], [6, 5, 6])
+    down = -NORMAL / np.linalg.norm(NORMAL)
+    reach = plane_distance(origin)
+    limit = reach * (1.0 + rng.choice([-1, 1], n) * 10.0 ** rng.uniform(-7, -3, n))
+    kinds.append((origin, np.tile(down, (n, 1)), limit))
+    # shadow rays: from plane and sphere points pushed off by 2 EPSILON, toward a light
+    on_plane = uniform([-5, 0, -5], [5, 0, 5])
+    on_plane -= (plane_distance(on_plane) - 2 * EPSILON)[:, None] * units(NORMAL[None])
+    outward = units(rng.normal(size=(n, 3)))
+    on_sphere = SPHERE_CENTRE + outward * (SPHERE_RADIUS + 2 * EPSILON)
+    origin = np.where(rng.integers(2, size=(n, 1)) == 0, on_plane, on_sphere)
+    light = uniform([-4, 3, -4], [4, 8, 4]) * rng.choice([1.0, 10.0], (n, 1))
+    offset = light - origin
+    distance = np.linalg.norm(offset, axis=1)
+    kinds.append((origin, offset / distance[:, None], distance))
+
+    rows = np.vstack([np.hstack([o, d, limit[:, None]]) for o, d, limit in kinds])
+    rows = rows[rng.permutation(len(rows))]
+    live = (rng.random(len(rows)) > 0.15).astype(float)
+    live[:LANES] = 0.0                            # a whole packet off: the loop never runs
+    live[LANES:2 * LANES] = 1.0
+    rows = np.hstack([rows, live[:, None]])
+    return rows[:len(rows) // LANES * LANES]
+
+
+_RUNS: dict = {}
+
+
+def run(device, variant: str, max_steps: int, precision: str):
+    """Rows, scalar outputs and packet outputs of one march variant (built once per run)."""
+    key = variant, max_steps, precision
+    if key not in _RUNS:
+        rows = rays(np.random.default_rng(SEED))
+        scalar, packet = run_twins(device, precision, sources(variant, precision, False),
+                                   sources(variant, precision, True), rows, outputs=5,
+                                   defines=defines(variant, max_steps, precision))
+        _RUNS[key] = rows, scalar, packet
+    return _RUNS[key]
+
+
+def need_precision(device, precision):
+    if precision == "float64" and not device.fp64:
+        pytest.skip(f"{device.label} has no float64")
+
+
+def assert_bits_equal(got, expected, what):
+    np.testing.assert_array_equal(got, expected, err_msg=what)
+    bits = np.uint32 if got.dtype == np.float32 else np.uint64
+    np.testing.assert_array_equal(got.view(bits), expected.view(bits),
+                                  err_msg=f"{what}: same values, different bits")
+
+
+# --- Tests --------------------------------------------------------------------------------
+
+@pytest.mark.parametrize(("variant", "max_steps"), RUNS, ids=RUN_IDS)
+@pytest.mark.parametrize("precision", PRECISIONS)
+def test_packet_march_equals_scalar_march_to_the_bit(opencl_device, precision, variant,
+                                                      max_steps):
+    need_precision(opencl_device, precision)
+    rows, scalar, packet = run(opencl_device, variant, max_steps, precision)
+    live = rows[:, 7] != 0
+    t, steps, hit = scalar[:, 0], scalar[:, 1], scalar[:, 2]
+    # the rays reach every outcome: hits, escapes, out of steps, and long marches
+    ran_out = live & (hit == 0) & (steps == max_steps)
+    assert (live & (hit == 1)).sum() > 50
+    assert (live & (hit == 0) & (steps < max_steps)).sum() > 50
+    assert ran_out.sum() > (10 if max_steps == MAX_STEPS else 200)
+    assert np.median(steps[live]) > (5 if max_steps == MAX_STEPS else 2)
+    # the packet hit is a mask: -1 on a hit, 0 elsewhere
+    assert set(np.unique(packet[:, 2])) == {-1.0, 0.0}
+    what = f"{variant}, {max_steps} steps"
+    assert_bits_equal(packet[:, 0], t, f"{what}: t")
+    np.testing.assert_array_equal(packet[:, 1], steps, err_msg=f"{what}: steps")
+    np.testing.assert_array_equal(-packet[:, 2], hit, err_msg=f"{what}: hit")
+
+
+@pytest.mark.parametrize(("variant", "max_steps"), RUNS, ids=RUN_IDS)
+@pytest.mark.parametrize("precision", PRECISIONS)
+def test_packet_shadows_equal_scalar_shadows_to_the_bit(opencl_device, precision, variant,
+                                                        max_steps):
+    need_precision(opencl_device, precision)
+    rows, scalar, packet = run(opencl_device, variant, max_steps, precision)
+    live = rows[:, 7] != 0
+    hard, soft = scalar[:, 3], scalar[:, 4]
+    assert (live & (hard == 0)).sum() > 50 and (live & (hard == 1)).sum() > 50
+    assert (live & (soft > 0) & (soft < 1)).sum() > 50      # penumbrae, not just 0 and 1
+    what = f"{variant}, {max_steps} steps"
+    assert_bits_equal(packet[:, 3], hard, f"{what}: hard_shadow")
+    assert_bits_equal(packet[:, 4], soft, f"{what}: soft_shadow")
+
+
+@pytest.mark.parametrize(("variant", "max_steps"), RUNS, ids=RUN_IDS)
+@pytest.mark.parametrize("precision", PRECISIONS)
+def test_lanes_that_are_not_live_are_not_marched(opencl_device, precision, variant,
+                                                 max_steps):
+    need_precision(opencl_device, precision)
+    rows, _, packet = run(opencl_device, variant, max_steps, precision)
+    off = rows[:, 7] == 0
+    assert off.sum() > LANES                      # a whole packet, and lanes among live ones
+    np.testing.assert_array_equal(packet[off], np.tile([-1.0, 0.0, 0.0, 1.0, 1.0],
+                                                        (off.sum(), 1)))
+
+
+def test_relaxed_marches_take_other_steps_than_the_plain_one(opencl_device):
+    """The relaxed variants are really relaxed here (else the tests above would check the
+    plain loop three times): other step counts for many rays, fewer on average."""
+    precision = "float64" if opencl_device.fp64 else "float32"
+    rows, plain, _ = run(opencl_device, "plain", MAX_STEPS, precision)
+    live = rows[:, 7] != 0
+    for variant in ("relaxed-fixed", "relaxed-auto"):
+        _, relaxed, _ = run(opencl_device, variant, MAX_STEPS, precision)
+        assert (relaxed[live, 1] != plain[live, 1]).mean() > 0.3, variant
+        assert relaxed[live, 1].mean() < plain[live, 1].mean(), variant
