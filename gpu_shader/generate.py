@@ -35,7 +35,7 @@ from .dialects import Dialect
 from .dialects import dialect as get_dialect
 from .library import GLSL_DIR, load_library
 from .parameters import ParameterBlock
-from .sdf_code import scene_sdf_code
+from .sdf_code import PACKET_TYPES, SCALAR_TYPES, scene_sdf_code
 
 LIT_MODES = ("phong", "blinn_phong", "toon")
 SPECULAR = {"phong": "specular_phong", "blinn_phong": "specular_blinn_phong",
@@ -72,6 +72,9 @@ def generate(scene: Scene, width: int, height: int, dialect: str = "glsl",
         language = get_dialect(dialect, precision)
     except KeyError as err:
         raise MarchlabError(err.args[0]) from None
+    if language.packets:
+        from .generate_packets import PacketGenerator
+        return PacketGenerator(scene, language).program(width, height)
     return _Generator(scene, language).program(width, height)
 
 
@@ -86,6 +89,7 @@ class _Generator:
         self.reflections = (self.s.reflection_depth > 0 and self.s.shading in LIT_MODES
                             and any(m.kr > 0 for m in self.materials))
         self.fog = self.s.fog.density > 0 and self.s.shading in LIT_MODES
+        self.types = PACKET_TYPES if dialect.packets else SCALAR_TYPES
 
     def program(self, width: int, height: int) -> Program:
         self.settings_rows(width, height)
@@ -93,15 +97,16 @@ class _Generator:
         if self.s.bounding_spheres:
             self.features.add("bounding_spheres")
             bounds = culled_bounds(self.scene.objects, self.s.epsilon)
-        sdf_source, sdf_used = scene_sdf_code(self.scene.objects, self.block, bounds)
+        sdf_source, sdf_used = scene_sdf_code(self.scene.objects, self.block, bounds,
+                                              self.types)
         self.features |= sdf_used
         parts = [
-            ("the SDF building blocks used by this scene (glsl/sdf.glsl)",
-             load_library("sdf").select(sdf_used)),
-            ("bounding spheres (glsl/culling.glsl)",
-             load_library("culling").select(["ray_meets_sphere"]) if bounds is not None else ""),
+            (f"the SDF building blocks used by this scene ({self.file('sdf')})",
+             self.d.library("sdf").select(sdf_used)),
+            (f"bounding spheres ({self.file('culling')})",
+             self.d.library("culling").select(["ray_meets_sphere"]) if bounds is not None else ""),
             ("the scene's SDF tree", sdf_source),
-            ("the camera (glsl/camera.glsl)", load_library("camera").select(["camera_ray"])),
+            (f"the camera ({self.file('camera')})", self.d.library("camera").select(["camera_ray"])),
         ]
         parts += self.march_parts()
         parts += [
@@ -123,6 +128,10 @@ class _Generator:
         body = [_banner(title) + text for title, text in parts if text]
         source = self.d.finish("\n".join(head + body))
         return Program(source, self.block.values(np.float64), tuple(sorted(self.features)))
+
+    def file(self, name: str) -> str:
+        """Where the building blocks ``name`` come from, for the program's section titles."""
+        return f"glsl/{name}_packet.cl" if self.d.packets else f"glsl/{name}.glsl"
 
     # --- parameters that every program has --------------------------------------------------
 
@@ -158,17 +167,17 @@ class _Generator:
             self.features.add(f"shadows:{self.s.shadows}")
         mode = self.s.relaxation
         if mode == "none":
-            return [("sphere tracing (glsl/march.glsl)", load_library("march").select(needs))]
+            return [(f"sphere tracing ({self.file('march')})", self.d.library("march").select(needs))]
         self.features.add(f"relaxation:{mode}")
         if mode == "fixed":
             self.block.named({"OMEGA": ("x", self.s.omega)})
         defines = (f"#define RELAXATION_AUTO {int(mode == 'auto')}\n"
                    + (f"#define SLOPE_WEIGHT {self.d.literal(SLOPE_WEIGHT)}\n"
                       if mode == "auto" else "") + "\n")
-        return [(f"over-relaxed sphere tracing, {mode} (glsl/relaxed.glsl)",
-                 defines + load_library("relaxed").select(["march"])),
-                ("shadow rays (glsl/march.glsl)",
-                 load_library("march").select(needs[1:], provided={"march"}))]
+        return [(f"over-relaxed sphere tracing, {mode} ({self.file('relaxed')})",
+                 defines + self.d.library("relaxed").select(["march"])),
+                (f"shadow rays ({self.file('march')})",
+                 self.d.library("march").select(needs[1:], provided={"march"}))]
 
     def normal_code(self) -> str:
         """``estimate_normal`` written out for the chosen stencil (`reference_cpu.normals`)."""
@@ -190,30 +199,31 @@ class _Generator:
     def shading_parts(self) -> list[tuple[str, str]]:
         mode = self.s.shading
         self.features.add(f"shading:{mode}")
-        shading_lib = load_library("shading")
+        shading_lib = self.d.library("shading")
         background = self.background_code()
         if mode == "normals":
-            return [("shading (glsl/shading.glsl)", shading_lib.select(["shade_normals", "path_step"] + background[1])),
+            return [(f"shading ({self.file('shading')})", shading_lib.select(["shade_normals", "path_step"] + background[1])),
                     ("the background", background[0])]
         if mode == "depth":
-            return [("shading (glsl/shading.glsl)", shading_lib.select(["shade_depth", "path_step"] + background[1])),
+            return [(f"shading ({self.file('shading')})", shading_lib.select(["shade_depth", "path_step"] + background[1])),
                     ("the background", background[0])]
         if mode == "steps":
-            return [("the path label (glsl/shading.glsl)", shading_lib.select(["path_step"])),
+            return [(f"the path label ({self.file('shading')})", shading_lib.select(["path_step"])),
                     ("the heat colour map (marchlab/colormaps.py)", self.heat_code())]
         light_source, light_needs = self.light_code()
         wanted = ["diffuse", SPECULAR[mode]] + background[1]
         wanted += ["toon_band"] * (mode == "toon") + ["checker"] * self.checker + ["path_step"]
         wanted += ["apply_fog"] * self.fog
         return [
-            ("lights (glsl/lights.glsl)", load_library("lights").select(light_needs)),
-            ("shading (glsl/shading.glsl)", shading_lib.select(wanted)),
+            (f"lights ({self.file('lights')})", self.d.library("lights").select(light_needs)),
+            (f"shading ({self.file('shading')})", shading_lib.select(wanted)),
             ("the background", background[0]),
             (f"the {mode} model over the scene's lights", light_source),
         ]
 
-    def material_code(self) -> str:
-        """Material rows per object id, and ``surface_albedo``."""
+    def material_rows(self) -> tuple[int, int, str]:
+        """Append each object's material rows; return the first row, the rows per object
+        and a comment saying what the rows hold."""
         stride = 4 if self.checker else 2
         first = len(self.block.rows)
         for m in self.materials:
@@ -223,13 +233,18 @@ class _Generator:
                 c = m.checker
                 self.block.row([*c.color_a, c.scale] if c else [0, 0, 0, 1])
                 self.block.row([*c.color_b, 1.0] if c else [0, 0, 0, 0])
-        lines = ["// Row 0: (color, ka); row 1: (kd, ks, shininess, kr)"
-                 + ("; row 2: (checker color_a, scale);\n// row 3: (checker color_b, 1 if checkered)."
-                    if self.checker else "."),
-                 f"#define MATERIAL(id, row) U[{first} + {stride} * (id) + (row)]", ""]
-        lines += ["vec3 surface_albedo(vec3 p, int id)", "{"]
         if self.checker:
             self.features.add("checker")
+        return first, stride, ("// Row 0: (color, ka); row 1: (kd, ks, shininess, kr)"
+                               + ("; row 2: (checker color_a, scale);\n// row 3: (checker color_b, "
+                                  "1 if checkered)." if self.checker else "."))
+
+    def material_code(self) -> str:
+        """Material rows per object id, and ``surface_albedo``."""
+        first, stride, rows = self.material_rows()
+        lines = [rows, f"#define MATERIAL(id, row) U[{first} + {stride} * (id) + (row)]", ""]
+        lines += ["vec3 surface_albedo(vec3 p, int id)", "{"]
+        if self.checker:
             lines += ["    if (MATERIAL(id, 3).w > 0.0) {",
                       "        return checker(p, MATERIAL(id, 2).xyz, MATERIAL(id, 3).xyz, MATERIAL(id, 2).w);",
                       "    }"]
@@ -242,7 +257,7 @@ class _Generator:
 
     def light_code(self) -> tuple[str, list[str]]:
         """The shading function, one block per light, and the light functions it calls."""
-        mode, b, needs = self.s.shading, self.block, set()
+        mode, needs = self.s.shading, set()
         term = {"phong": "diffuse(n, s.to_light)", "blinn_phong": "diffuse(n, s.to_light)",
                 "toon": "toon_band(diffuse(n, s.to_light), TOON_BANDS)"}[mode]
         spec = f"{SPECULAR[mode]}(n, s.to_light, v, shininess)"
@@ -262,31 +277,8 @@ class _Generator:
                  "    real visible;",
                  "    LightSample s;"]
         for i, light in enumerate(self.scene.lights):
-            kind = LIGHT_KINDS.get(type(light))
-            if kind is None:
-                raise MarchlabError(f"the shader generator does not support lights of type "
-                                    f"{type(light).__name__} yet; render with --backend numpy")
-            self.features.add(f"light:{kind}")
+            kind, call = self.light_call(i, light)
             needs.add(f"light_{kind}")
-            radiance = np.multiply(light.color, light.intensity)
-            L = f"LIGHT{i}_"
-            if kind == "directional":
-                direction = np.asarray(light.direction, dtype=np.float64)
-                b.named({L + "TO_LIGHT": ("xyz", -direction / np.linalg.norm(direction))})
-                b.named({L + "RADIANCE": ("xyz", radiance)})
-                call = f"light_directional({L}TO_LIGHT, {L}RADIANCE)"
-            else:
-                b.named({L + "POSITION": ("xyz", light.position)})
-                b.named({L + "RADIANCE": ("xyz", radiance)})
-                b.named({L + "ATTENUATION": ("xyz", (light.constant, light.linear, light.quadratic))})
-                call = f"light_point(p, {L}POSITION, {L}RADIANCE, {L}ATTENUATION)"
-            if kind == "spot":
-                axis = np.asarray(light.direction, dtype=np.float64)
-                cos_inner = math.cos(math.radians(light.inner_angle))
-                cos_outer = math.cos(math.radians(light.outer_angle))
-                b.named({L + "AXIS": ("xyz", axis / np.linalg.norm(axis))})
-                b.named({L + "CONE": ("xy", (cos_outer, cos_inner - cos_outer))})
-                call = f"light_spot(p, {L}POSITION, {L}RADIANCE, {L}ATTENUATION, {L}AXIS, {L}CONE)"
             lines += [f"    // light {i}: {kind}", f"    s = {call};"]
             if self.s.shadows != "none":
                 lines.append("    visible = light_visible(p, n, s);")
@@ -301,6 +293,34 @@ class _Generator:
         if self.s.shadows != "none" and self.scene.lights:
             source = self.shadow_code() + "\n" + source
         return source, sorted(needs)
+
+    def light_call(self, i: int, light) -> tuple[str, str]:
+        """Put light ``i``'s numbers in the parameter block; return its kind and the call
+        that samples it at p."""
+        kind = LIGHT_KINDS.get(type(light))
+        if kind is None:
+            raise MarchlabError(f"the shader generator does not support lights of type "
+                                f"{type(light).__name__} yet; render with --backend numpy")
+        self.features.add(f"light:{kind}")
+        b = self.block
+        radiance = np.multiply(light.color, light.intensity)
+        L = f"LIGHT{i}_"
+        if kind == "directional":
+            direction = np.asarray(light.direction, dtype=np.float64)
+            b.named({L + "TO_LIGHT": ("xyz", -direction / np.linalg.norm(direction))})
+            b.named({L + "RADIANCE": ("xyz", radiance)})
+            return kind, f"light_directional({L}TO_LIGHT, {L}RADIANCE)"
+        b.named({L + "POSITION": ("xyz", light.position)})
+        b.named({L + "RADIANCE": ("xyz", radiance)})
+        b.named({L + "ATTENUATION": ("xyz", (light.constant, light.linear, light.quadratic))})
+        if kind == "point":
+            return kind, f"light_point(p, {L}POSITION, {L}RADIANCE, {L}ATTENUATION)"
+        axis = np.asarray(light.direction, dtype=np.float64)
+        cos_inner = math.cos(math.radians(light.inner_angle))
+        cos_outer = math.cos(math.radians(light.outer_angle))
+        b.named({L + "AXIS": ("xyz", axis / np.linalg.norm(axis))})
+        b.named({L + "CONE": ("xy", (cos_outer, cos_inner - cos_outer))})
+        return kind, f"light_spot(p, {L}POSITION, {L}RADIANCE, {L}ATTENUATION, {L}AXIS, {L}CONE)"
 
     def shadow_code(self) -> str:
         return "\n".join([
@@ -328,7 +348,8 @@ class _Generator:
             self.block.named({"BACKGROUND_TOP": ("xyz", bg.top)})
             call, needs = ("background_sky(direction, BACKGROUND_BOTTOM, BACKGROUND_TOP)",
                            ["background_sky"])
-        return f"vec3 background(vec3 direction)\n{{\n    return {call};\n}}\n", needs
+        vec3 = self.types["vec3"]
+        return f"{vec3} background({vec3} direction)\n{{\n    return {call};\n}}\n", needs
 
     def heat_code(self) -> str:
         """``heat`` by linear interpolation between the stops of `marchlab.colormaps`."""
