@@ -34,13 +34,30 @@ def primary_rays_only(scene):
     return dataclasses.replace(scene, render=settings)
 
 
+def render_with(backend: str):
+    """A function (scene, width, height, precision) -> Frame for a row of the table.
+
+    "opencl one-ray" is the opencl backend's one-ray program (`reference_cpu.opencl.render`
+    with packets=False), timed beside the packet program it ships with."""
+    if backend == ONE_RAY:
+        from reference_cpu import opencl
+        return lambda scene, w, h, precision: opencl.render(scene, w, h, precision,
+                                                            packets=False)
+    return lambda scene, w, h, precision: marchlab.render(scene, w, h, backend=backend,
+                                                          precision=precision)
+
+
+ONE_RAY = "opencl one-ray"
+
+
 def time_render(scene, width, height, backend, precision, repeat):
     """(median wall s, best wall s, median CPU s, frame) over ``repeat`` renders after a warm-up."""
-    frame = marchlab.render(scene, width, height, backend=backend, precision=precision)
+    render = render_with(backend)
+    frame = render(scene, width, height, precision)
     walls, cpus = [], []
     for _ in range(repeat):
         wall, cpu = time.perf_counter(), time.process_time()
-        frame = marchlab.render(scene, width, height, backend=backend, precision=precision)
+        frame = render(scene, width, height, precision)
         walls.append(time.perf_counter() - wall)
         cpus.append(time.process_time() - cpu)
     return statistics.median(walls), min(walls), statistics.median(cpus), frame
@@ -80,21 +97,27 @@ def main(argv=None) -> int:
           f"{platform.python_version()}, NumPy {np.__version__}.")
     for backend in backends:
         print(f"- {backend}: {device(backend)}")
+    if "opencl" in backends:
+        backends.insert(backends.index("opencl") + 1, ONE_RAY)
     print("\n| workload | backend | precision | median ms | best ms | CPU ms | vs numpy float64 "
-          "| vs numpy float32 | frames/s | mean steps/px |")
-    print("| --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+          "| vs numpy float32 | vs gpu | frames/s | mean steps/px |")
+    print("| --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+    # numpy and gpu go first, so the ratios against them are there for the rows after.
+    backends.sort(key=lambda b: {"numpy": 0, "gpu": 1}.get(b, 2))
     for label, variant in (("full scene", scene), ("primary rays", primary_rays_only(scene))):
-        numpy_times = {}
+        times = {}
         for backend in backends:
-            for precision in sorted(BACKENDS[backend].precisions, reverse=True):
+            precisions = BACKENDS["opencl" if backend == ONE_RAY else backend].precisions
+            for precision in sorted(precisions, reverse=True):
                 median, best, cpu, frame = time_render(variant, width, height, backend,
                                                        precision, args.repeat)
-                if backend == "numpy":
-                    numpy_times[precision] = median
-                ratios = [f"{numpy_times[p] / median:.1f}x" if p in numpy_times else "-"
-                          for p in ("float64", "float32")]
+                if backend in ("numpy", "gpu"):
+                    times[backend, precision] = median
+                ratios = [f"{times[key] / median:.2f}x" if key in times else "-"
+                          for key in (("numpy", "float64"), ("numpy", "float32"),
+                                      ("gpu", "float32"))]
                 print(f"| {label} | {backend} | {precision} | {median * 1e3:.1f} | "
-                      f"{best * 1e3:.1f} | {cpu * 1e3:.0f} | {ratios[0]} | {ratios[1]} | "
+                      f"{best * 1e3:.1f} | {cpu * 1e3:.0f} | {' | '.join(ratios)} | "
                       f"{1 / median:.1f} | {frame.steps.mean():.1f} |", flush=True)
     return 0
 
@@ -104,7 +127,7 @@ def device(backend: str) -> str:
     if backend == "gpu":
         from gpu_shader.render import device_name
         return f"OpenGL renderer {device_name()}"
-    if backend == "opencl":
+    if backend in ("opencl", ONE_RAY):
         from reference_cpu.opencl import device_name
         return f"OpenCL device {device_name()}"
     return cpu_name()

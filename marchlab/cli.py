@@ -127,9 +127,11 @@ def build_parser() -> Parser:
 
     p = sub.add_parser("shader", help="print the shader generated for a scene")
     p.add_argument("scene", help="bundled scene name or a .toml path")
-    p.add_argument("--dialect", default="glsl", choices=["glsl", "opencl"],
-                   help="glsl (the gpu backend's fragment shader) or opencl (the opencl "
-                        "backend's kernel); default: glsl")
+    p.add_argument("--dialect", default="glsl", choices=["glsl", "opencl", "opencl-packets"],
+                   help="glsl (the gpu backend's fragment shader), opencl (the same as an "
+                        "OpenCL kernel, one ray per work-item) or opencl-packets (the kernel "
+                        "the opencl backend runs: 16 rays per work-item as vectors); "
+                        "default: glsl")
     p.add_argument("--precision", default="float32", choices=["float32", "float64"],
                    help="what `real` means (float64: opencl only); default: float32")
     p.add_argument("--numbered", action="store_true",

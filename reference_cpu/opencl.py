@@ -21,6 +21,7 @@ from typing import Callable
 
 import numpy as np
 
+from gpu_shader.dialects import PACKET_LANES
 from gpu_shader.generate import generate
 from gpu_shader.planes import frame_from_planes, row_bands
 from marchlab.errors import MarchlabError
@@ -32,6 +33,7 @@ INSTALL_HINT = ("install a working OpenCL CPU driver (Debian/Ubuntu: apt install
                 "pocl-opencl-icd; `make demo` does this)")
 PROGRAM_CACHE_SIZE = 32
 WORK_GROUP = (16, 4)           # pixels per work-group (columns, rows); see docs/performance.md
+PACKET_WORK_GROUP = (1, 4)     # packets per work-group (columns, rows)
 
 # The smallest kernel that proves a device can compile and run code.
 PROBE = """
@@ -163,14 +165,22 @@ def _first_line(err: Exception) -> str:
 
 
 def render(scene: Scene, width: int, height: int, precision: str = "float32",
-           progress: Callable[[int, int], None] | None = None) -> Frame:
-    """Render ``scene`` with the OpenCL kernel (see `marchlab.render`)."""
+           progress: Callable[[int, int], None] | None = None,
+           packets: bool = True) -> Frame:
+    """Render ``scene`` with the OpenCL kernel (see `marchlab.render`).
+
+    ``packets`` (the default) runs the packet program, LANES pixels of a row per work-item
+    computed as vectors (`gpu_shader.generate_packets`), which is several times faster on a
+    CPU; False runs the one-ray program, the line-by-line twin of the GLSL shader. Both give
+    the same frame (tests/opencl/test_packet_program.py).
+    """
     dev = device()
     if precision == "float64" and not dev.fp64:
         raise MarchlabError(f"the OpenCL device {dev.label} has no float64 (cl_khr_fp64); "
                             "use --precision float32")
     cl = _import_pyopencl()
-    program = generate(scene, width, height, dialect="opencl", precision=precision)
+    program = generate(scene, width, height, precision=precision,
+                       dialect="opencl-packets" if packets else "opencl")
     dtype = np.dtype(np.float32 if precision == "float32" else np.float64)
     kernel = _kernel(cl, dev, program.source, precision)
 
@@ -180,10 +190,11 @@ def render(scene: Scene, width: int, height: int, precision: str = "float32",
     planes = np.empty((3, height, width, 4), dtype)
     outputs = [cl.Buffer(dev.context, flags.WRITE_ONLY, planes[i].nbytes) for i in range(3)]
     kernel.set_args(parameters, *outputs)
-    local = WORK_GROUP
+    local = PACKET_WORK_GROUP if packets else WORK_GROUP
+    columns = -(-width // PACKET_LANES) if packets else width     # work-items per row
     for start, stop in row_bands(height, progress):
         rows = stop - start
-        global_size = (_round_up(width, local[0]), _round_up(rows, local[1]))
+        global_size = (_round_up(columns, local[0]), _round_up(rows, local[1]))
         cl.enqueue_nd_range_kernel(dev.queue, kernel, global_size, local,
                                    global_work_offset=(0, start))
         if progress is not None:
