@@ -2,7 +2,7 @@
 
 `gpu_shader.generate` writes a program that traces one ray per work-item. On a CPU that
 leaves the SIMD units idle, because PoCL does not vectorise a kernel whose loop trip count
-depends on the data (benchmarks/bench_opencl_packets.py). The packet program gives each
+depends on the data (docs/performance.md). The packet program gives each
 work-item LANES neighbouring pixels of a row and computes on vectors with one lane per ray
 (glsl/packet.cl). Most of it comes from where the one-ray program comes from:
 
@@ -24,7 +24,7 @@ from __future__ import annotations
 from marchlab.colormaps import HEAT_COLORS, HEAT_STOPS
 from reference_cpu.normals import STENCILS
 
-from .generate import SPECULAR, _Generator
+from .generate import _Generator
 
 
 class PacketGenerator(_Generator):
@@ -82,11 +82,7 @@ class PacketGenerator(_Generator):
         """The shading function over a packet: the lights' terms, shadows for the lanes in
         ``live`` only."""
         mode, needs = self.s.shading, set()
-        term = {"phong": "diffuse(n, s.to_light)", "blinn_phong": "diffuse(n, s.to_light)",
-                "toon": "toon_band(diffuse(n, s.to_light), TOON_BANDS)"}[mode]
-        spec = f"{SPECULAR[mode]}(n, s.to_light, v, shininess)"
-        if mode == "toon":
-            spec = f"toon_band({spec}, TOON_BANDS)"
+        term, spec = self.light_terms()
         lines = [f"// The {mode} model (reference_cpu/shading.py) summed over the lights, plus ambient,",
                  "// for the lanes in `live`. Returns (colour, features): features codes the checker",
                  "// cell and, one bit per light, whether a hard shadow blocked it (for the path label).",
