@@ -258,11 +258,7 @@ class _Generator:
     def light_code(self) -> tuple[str, list[str]]:
         """The shading function, one block per light, and the light functions it calls."""
         mode, needs = self.s.shading, set()
-        term = {"phong": "diffuse(n, s.to_light)", "blinn_phong": "diffuse(n, s.to_light)",
-                "toon": "toon_band(diffuse(n, s.to_light), TOON_BANDS)"}[mode]
-        spec = f"{SPECULAR[mode]}(n, s.to_light, v, shininess)"
-        if mode == "toon":
-            spec = f"toon_band({spec}, TOON_BANDS)"
+        term, spec = self.light_terms()
         lines = [f"// The {mode} model (reference_cpu/shading.py) summed over the lights, plus ambient.",
                  "// Returns (colour, features): features codes the checker cell and, one bit per",
                  "// light, whether a hard shadow blocked it (for the path label).",
@@ -293,6 +289,16 @@ class _Generator:
         if self.s.shadows != "none" and self.scene.lights:
             source = self.shadow_code() + "\n" + source
         return source, sorted(needs)
+
+    def light_terms(self) -> tuple[str, str]:
+        """The diffuse and specular terms of one light sample ``s`` in the shading mode."""
+        mode = self.s.shading
+        term = {"phong": "diffuse(n, s.to_light)", "blinn_phong": "diffuse(n, s.to_light)",
+                "toon": "toon_band(diffuse(n, s.to_light), TOON_BANDS)"}[mode]
+        spec = f"{SPECULAR[mode]}(n, s.to_light, v, shininess)"
+        if mode == "toon":
+            spec = f"toon_band({spec}, TOON_BANDS)"
+        return term, spec
 
     def light_call(self, i: int, light) -> tuple[str, str]:
         """Put light ``i``'s numbers in the parameter block; return its kind and the call
