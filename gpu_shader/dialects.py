@@ -254,40 +254,26 @@ def thread_parameters(source: str) -> str:
                           "\n".join(lines))
 
 
-def _opencl(real: str, dtype) -> Dialect:
+def _opencl(real: str, dtype, packets: bool = False) -> Dialect:
+    """OpenCL C over `real`: one ray per work-item, or one packet of rays (``packets``)."""
     return Dialect(
-        name="opencl",
-        prelude=_opencl_prelude(real) + _OPENCL_VECTORS,
-        struct=_opencl_struct,
+        name="opencl-packets" if packets else "opencl",
+        prelude=_opencl_packet_prelude(real) if packets else _opencl_prelude(real) + _OPENCL_VECTORS,
+        struct=_opencl_packet_struct if packets else _opencl_struct,
         to_real=lambda expr: f"(real)({expr})",
         to_int=lambda expr: f"(int)({expr})",
         declare_parameters=lambda rows, fixed: _OPENCL_PARAMETERS,
         real_dtype=np.dtype(dtype),
-        entry="main.cl",
+        entry="main_packet.cl" if packets else "main.cl",
         finish=thread_parameters,
+        packets=packets,
     )
 
 
 OPENCL = {"float32": _opencl("float", np.float32), "float64": _opencl("double", np.float64)}
 
-
-def _opencl_packets(real: str, dtype) -> Dialect:
-    return Dialect(
-        name="opencl-packets",
-        prelude=_opencl_packet_prelude(real),
-        struct=_opencl_packet_struct,
-        to_real=lambda expr: f"(real)({expr})",
-        to_int=lambda expr: f"(int)({expr})",
-        declare_parameters=lambda rows, fixed: _OPENCL_PARAMETERS,
-        real_dtype=np.dtype(dtype),
-        entry="main_packet.cl",
-        finish=thread_parameters,
-        packets=True,
-    )
-
-
-OPENCL_PACKETS = {"float32": _opencl_packets("float", np.float32),
-                  "float64": _opencl_packets("double", np.float64)}
+OPENCL_PACKETS = {"float32": _opencl("float", np.float32, packets=True),
+                  "float64": _opencl("double", np.float64, packets=True)}
 
 DIALECTS = {"glsl": {"float32": GLSL}, "opencl": OPENCL, "opencl-packets": OPENCL_PACKETS}
 
