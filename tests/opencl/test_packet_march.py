@@ -26,7 +26,9 @@ from gpu_shader.dialects import dialect
 from gpu_shader.library import load_library
 from reference_cpu.relaxation import SLOPE_WEIGHT
 
-from packet_twins import LANES, run_twins      # tests/opencl, on the path as the tests' folder
+# tests/opencl, on the path as the tests' folder
+from packet_twins import (LANES, assert_bits_equal, need_precision, normalised, run_twins,
+                          units)
 
 SEED = 20240612
 PRECISIONS = ["float32", "float64"]
@@ -181,10 +183,6 @@ def defines(variant: str, max_steps: int, precision: str) -> dict:
 
 # --- Rays ---------------------------------------------------------------------------------
 
-def units(v) -> np.ndarray:
-    return v / np.linalg.norm(v, axis=1, keepdims=True)
-
-
 def plane_distance(p) -> np.ndarray:
     return p @ (NORMAL / np.linalg.norm(NORMAL)) - OFFSET
 
@@ -195,37 +193,37 @@ def rays(rng, n=96) -> np.ndarray:
     uniform = lambda low, high: rng.uniform(low, high, (n, 3))          # noqa: E731
     # anywhere above the plane, in any direction
     origin = uniform([-6, 0.2, -6], [6, 4, 6])
-    kinds.append((origin, units(rng.normal(size=(n, 3))), rng.uniform(1, 70, n)))
+    kinds.append((origin, units(rng, n), rng.uniform(1, 70, n)))
     # at the sphere, from afar: through it, and tangent to within +-2% of its radius
-    origin = SPHERE_CENTRE + units(rng.normal(size=(n, 3))) * rng.uniform(3, 10, (n, 1))
+    origin = SPHERE_CENTRE + units(rng, n) * rng.uniform(3, 10, (n, 1))
     origin[:, 1] = np.abs(origin[:, 1]) + 0.5
-    target = SPHERE_CENTRE + units(rng.normal(size=(n, 3))) * SPHERE_RADIUS
-    miss = rng.uniform(-0.02, 0.02, (n, 1)) * units(target - SPHERE_CENTRE)
-    kinds.append((origin, units(target + miss - origin), np.full(n, 40.0)))
+    target = SPHERE_CENTRE + units(rng, n) * SPHERE_RADIUS
+    miss = rng.uniform(-0.02, 0.02, (n, 1)) * normalised(target - SPHERE_CENTRE)
+    kinds.append((origin, normalised(target + miss - origin), np.full(n, 40.0)))
     # at the thin box, edge-on and face-on: the relaxed march crosses it and steps back
     origin = uniform([-3, 0.2, -3], [-0.5, 2.5, 3])
     target = BOX_CENTRE + rng.uniform(-1, 1, (n, 3)) * BOX_SIZE * 1.05
-    kinds.append((origin, units(target - origin), np.full(n, 30.0)))
+    kinds.append((origin, normalised(target - origin), np.full(n, 30.0)))
     # grazing the plane toward far targets: slow convergence, many run out of MAX_STEPS
     origin = uniform([-5, 0.02, -5], [5, 0.5, 5])
-    horizontal = units(np.hstack([rng.normal(size=(n, 1)), np.zeros((n, 1)),
-                                  rng.normal(size=(n, 1))]))
+    horizontal = normalised(np.hstack([rng.normal(size=(n, 1)), np.zeros((n, 1)),
+                                       rng.normal(size=(n, 1))]))
     horizontal[:, 1] = -10.0 ** rng.uniform(-4, -1.5, n)
-    kinds.append((origin, units(horizontal), np.full(n, 1e3)))
+    kinds.append((origin, normalised(horizontal), np.full(n, 1e3)))
     # parallel to the plane, well above it, far target: steps of ~0.3-1, out of steps
     origin = uniform([-5, 0.3, 5], [5, 1.0, 8])
     direction = np.tile([0.0, 0.0, 1.0], (n, 1)) + rng.normal(size=(n, 3)) * [0.1, 0, 0.1]
-    kinds.append((origin, units(direction) * [1, 0, 1] + [0, 0.01, 0], np.full(n, 1e3)))
+    kinds.append((origin, normalised(direction) * [1, 0, 1] + [0, 0.01, 0], np.full(n, 1e3)))
     # starting inside the sphere, the box, or under the plane
-    inside_sphere = SPHERE_CENTRE + units(rng.normal(size=(n, 3))) * rng.uniform(0, 0.95, (n, 1))
+    inside_sphere = SPHERE_CENTRE + units(rng, n) * rng.uniform(0, 0.95, (n, 1))
     inside_box = BOX_CENTRE + rng.uniform(-0.9, 0.9, (n, 3)) * BOX_SIZE
     under = uniform([-5, -1, -5], [5, -0.15, 5])
     origin = np.where(rng.integers(3, size=(n, 1)) == 0, inside_sphere,
                       np.where(rng.integers(2, size=(n, 1)) == 0, inside_box, under))
-    kinds.append((origin, units(rng.normal(size=(n, 3))), rng.uniform(1, 60, n)))
+    kinds.append((origin, units(rng, n), rng.uniform(1, 60, n)))
     # upward, small limits: escape
     origin = uniform([-4, 2.5, -4], [4, 4, 4])
-    direction = units(rng.normal(size=(n, 3)) * [1, 0.2, 1] + [0, 1, 0])
+    direction = normalised(rng.normal(size=(n, 3)) * [1, 0.2, 1] + [0, 1, 0])
     kinds.append((origin, direction, rng.uniform(0.05, 5, n)))
     # straight at the plane, hit within a hair of the limit, before or after it
     origin = uniform([-6, 0.5, 3], [6, 5, 6])
@@ -235,8 +233,8 @@ def rays(rng, n=96) -> np.ndarray:
     kinds.append((origin, np.tile(down, (n, 1)), limit))
     # shadow rays: from plane and sphere points pushed off by 2 EPSILON, toward a light
     on_plane = uniform([-5, 0, -5], [5, 0, 5])
-    on_plane -= (plane_distance(on_plane) - 2 * EPSILON)[:, None] * units(NORMAL[None])
-    outward = units(rng.normal(size=(n, 3)))
+    on_plane -= (plane_distance(on_plane) - 2 * EPSILON)[:, None] * normalised(NORMAL[None])
+    outward = units(rng, n)
     on_sphere = SPHERE_CENTRE + outward * (SPHERE_RADIUS + 2 * EPSILON)
     origin = np.where(rng.integers(2, size=(n, 1)) == 0, on_plane, on_sphere)
     light = uniform([-4, 3, -4], [4, 8, 4]) * rng.choice([1.0, 10.0], (n, 1))
@@ -268,27 +266,26 @@ def run(device, variant: str, max_steps: int, precision: str):
     return _RUNS[key]
 
 
-def need_precision(device, precision):
-    if precision == "float64" and not device.fp64:
-        pytest.skip(f"{device.label} has no float64")
+def each_run(test):
+    """Parametrise ``test`` over every precision and every run (variant, max_steps)."""
+    test = pytest.mark.parametrize("precision", PRECISIONS)(test)
+    return pytest.mark.parametrize(("variant", "max_steps"), RUNS, ids=RUN_IDS)(test)
 
 
-def assert_bits_equal(got, expected, what):
-    np.testing.assert_array_equal(got, expected, err_msg=what)
-    bits = np.uint32 if got.dtype == np.float32 else np.uint64
-    np.testing.assert_array_equal(got.view(bits), expected.view(bits),
-                                  err_msg=f"{what}: same values, different bits")
+def live_run(device, precision: str, variant: str, max_steps: int):
+    """Which rows are live, and the scalar and packet outputs of a run; skips the test
+    where the device has no ``precision``."""
+    need_precision(device, precision)
+    rows, scalar, packet = run(device, variant, max_steps, precision)
+    return rows[:, 7] != 0, scalar, packet
 
 
 # --- Tests --------------------------------------------------------------------------------
 
-@pytest.mark.parametrize(("variant", "max_steps"), RUNS, ids=RUN_IDS)
-@pytest.mark.parametrize("precision", PRECISIONS)
+@each_run
 def test_packet_march_equals_scalar_march_to_the_bit(opencl_device, precision, variant,
                                                       max_steps):
-    need_precision(opencl_device, precision)
-    rows, scalar, packet = run(opencl_device, variant, max_steps, precision)
-    live = rows[:, 7] != 0
+    live, scalar, packet = live_run(opencl_device, precision, variant, max_steps)
     t, steps, hit = scalar[:, 0], scalar[:, 1], scalar[:, 2]
     # the rays reach every outcome: hits, escapes, out of steps, and long marches
     ran_out = live & (hit == 0) & (steps == max_steps)
@@ -304,13 +301,10 @@ def test_packet_march_equals_scalar_march_to_the_bit(opencl_device, precision, v
     np.testing.assert_array_equal(-packet[:, 2], hit, err_msg=f"{what}: hit")
 
 
-@pytest.mark.parametrize(("variant", "max_steps"), RUNS, ids=RUN_IDS)
-@pytest.mark.parametrize("precision", PRECISIONS)
+@each_run
 def test_packet_shadows_equal_scalar_shadows_to_the_bit(opencl_device, precision, variant,
                                                         max_steps):
-    need_precision(opencl_device, precision)
-    rows, scalar, packet = run(opencl_device, variant, max_steps, precision)
-    live = rows[:, 7] != 0
+    live, scalar, packet = live_run(opencl_device, precision, variant, max_steps)
     hard, soft = scalar[:, 3], scalar[:, 4]
     assert (live & (hard == 0)).sum() > 50 and (live & (hard == 1)).sum() > 50
     assert (live & (soft > 0) & (soft < 1)).sum() > 50      # penumbrae, not just 0 and 1
@@ -319,13 +313,11 @@ def test_packet_shadows_equal_scalar_shadows_to_the_bit(opencl_device, precision
     assert_bits_equal(packet[:, 4], soft, f"{what}: soft_shadow")
 
 
-@pytest.mark.parametrize(("variant", "max_steps"), RUNS, ids=RUN_IDS)
-@pytest.mark.parametrize("precision", PRECISIONS)
+@each_run
 def test_lanes_that_are_not_live_are_not_marched(opencl_device, precision, variant,
                                                  max_steps):
-    need_precision(opencl_device, precision)
-    rows, _, packet = run(opencl_device, variant, max_steps, precision)
-    off = rows[:, 7] == 0
+    live, _, packet = live_run(opencl_device, precision, variant, max_steps)
+    off = ~live
     assert off.sum() > LANES                      # a whole packet, and lanes among live ones
     np.testing.assert_array_equal(packet[off], np.tile([-1.0, 0.0, 0.0, 1.0, 1.0],
                                                         (off.sum(), 1)))

@@ -19,62 +19,27 @@ form); each test then checks its function's columns of the shared run.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Callable
-
 import numpy as np
 import pytest
 
-from gpu_shader.library import load_library
 from marchlab.builder import Camera
 from marchlab.camera import camera_basis
 
-from packet_twins import LANES, run_twins      # tests/opencl, on the path as the tests' folder
+# tests/opencl, on the path as the tests' folder
+from packet_twins import (LANES, Case, TwinCases, assert_bits_equal, assert_twin_names, mix,
+                          near, need_precision, per_packet, pick, units)
 
 SEED = 20240611
 BLOCKS = 128                 # packets of LANES rows; the parameters change from one to the next
 ROWS = BLOCKS * LANES
 PRECISIONS = ["float32", "float64"]
+NEAR = (-7, -2)              # `near`: a relative 1e-7..1e-2 off, just inside and just outside
 
-# scalar library -> its packet twin
-TWIN_LIBRARIES = {"sdf": "sdf_packet", "culling": "culling_packet", "camera": "camera_packet"}
+# the scalar libraries whose packet twins (sdf_packet, ...) are checked here
+LIBRARIES = ["sdf", "culling", "camera"]
 
 
 # --- Inputs --------------------------------------------------------------------------------
-
-def mix(rng, *options) -> np.ndarray:
-    """Row by row, one of the equally shaped arrays ``options``, at random."""
-    stacked = np.stack([np.broadcast_to(o, np.shape(options[0])) for o in options])
-    return stacked[rng.integers(len(options), size=ROWS), np.arange(ROWS)]
-
-
-def mix_packets(rng, *options) -> np.ndarray:
-    """Packet by packet, one of the options (arrays of BLOCKS values, or one value for all)."""
-    shape = np.shape(options[0])
-    stacked = np.stack([np.broadcast_to(o, shape) for o in options])
-    return stacked[rng.integers(len(options), size=BLOCKS), np.arange(BLOCKS)]
-
-
-def per_packet(values) -> np.ndarray:
-    """(BLOCKS, k) values, each repeated for the LANES rows of its packet."""
-    return np.repeat(np.asarray(values, float).reshape(BLOCKS, -1), LANES, axis=0)
-
-
-def pick(rng, choices, shape=BLOCKS) -> np.ndarray:
-    return np.asarray(choices, float)[rng.integers(len(choices), size=shape)]
-
-
-def units(rng, n=ROWS) -> np.ndarray:
-    v = rng.normal(size=(n, 3))
-    return v / np.linalg.norm(v, axis=1, keepdims=True)
-
-
-def near(rng, values) -> np.ndarray:
-    """Values a relative 1e-7..1e-2 off, either way: just inside and just outside a surface."""
-    shape = (len(values),) + (1,) * (np.ndim(values) - 1)
-    offset = rng.choice([-1.0, 1.0], size=shape) * 10.0 ** rng.uniform(-7, -2, size=shape)
-    return values * (1.0 + offset)
-
 
 def anywhere(rng, scale=1.0) -> np.ndarray:
     """Points of every kind: random at two scales, far away, zero, on an axis, on a
@@ -88,8 +53,8 @@ def anywhere(rng, scale=1.0) -> np.ndarray:
 
 def on_surface(rng, anywhere_points, surface_points) -> np.ndarray:
     """Half anywhere, half on the surface or within a hair of it."""
-    return mix(rng, anywhere_points, surface_points, near(rng, surface_points),
-               surface_points, near(rng, surface_points))
+    return mix(rng, anywhere_points, surface_points, near(rng, surface_points, NEAR),
+               surface_points, near(rng, surface_points, NEAR))
 
 
 def distances(rng) -> tuple[np.ndarray, np.ndarray]:
@@ -116,14 +81,14 @@ def cell_boundaries(rng, period, count=None) -> np.ndarray:
     n = rng.integers(-6, 6, size=period.shape) if count is None else (
         np.round(count) + rng.integers(-2, 3, size=period.shape))
     n = n * rng.choice([-1.0, 1.0], size=period.shape)
-    return mix(rng, period * (n + 0.5), period * n, near(rng, period * (n + 0.5)))
+    return mix(rng, period * (n + 0.5), period * n, near(rng, period * (n + 0.5), NEAR))
 
 
 # --- Each function's inputs: one (ROWS, width) array per argument -----------------------
 
 def sphere_case(rng):
-    radius = per_packet(mix_packets(rng, rng.uniform(0.1, 3.0, BLOCKS), 1.0, 0.5))
-    p = on_surface(rng, anywhere(rng), units(rng) * radius)
+    radius = per_packet(mix(rng, rng.uniform(0.1, 3.0, BLOCKS), 1.0, 0.5))
+    p = on_surface(rng, anywhere(rng), units(rng, ROWS) * radius)
     return [p, radius]
 
 
@@ -134,15 +99,16 @@ def box_case(rng):
 
 def round_box_case(rng):
     b = rng.uniform(0.1, 2.0, (BLOCKS, 3))
-    radius = b.min(axis=1) * mix_packets(rng, rng.uniform(0, 1, BLOCKS), 0.0, 1.0)
+    radius = b.min(axis=1) * mix(rng, rng.uniform(0, 1, BLOCKS), 0.0, 1.0)
     b, radius = per_packet(b), per_packet(radius)
     return [on_surface(rng, anywhere(rng), box_faces(rng, b)), b, radius]
 
 
 def plane_case(rng):
-    axis = np.eye(3)[rng.integers(3, size=BLOCKS)] * pick(rng, [1.0, 2.0, -1.0])[:, None]
-    normal = mix_packets(rng, rng.normal(size=(BLOCKS, 3)) * 2.0, axis)
-    offset = mix_packets(rng, rng.uniform(-2, 2, BLOCKS), 0.0)
+    axis = np.eye(3)[rng.integers(3, size=BLOCKS)]
+    axis = axis * pick(rng, [1.0, 2.0, -1.0], BLOCKS)[:, None]
+    normal = mix(rng, rng.normal(size=(BLOCKS, 3)) * 2.0, axis)
+    offset = mix(rng, rng.uniform(-2, 2, BLOCKS), 0.0)
     normal, offset = per_packet(normal), per_packet(offset)
     p = anywhere(rng)
     unit = normal / np.linalg.norm(normal, axis=1, keepdims=True)
@@ -177,19 +143,19 @@ def cylinder_case(rng):
 
 def capsule_case(rng):
     a = rng.normal(size=(BLOCKS, 3))
-    b = mix_packets(rng, rng.normal(size=(BLOCKS, 3)), a + np.eye(3)[1])
+    b = mix(rng, rng.normal(size=(BLOCKS, 3)), a + np.eye(3)[1])
     radius = rng.uniform(0.05, 1.0, BLOCKS)
     a, b, radius = per_packet(a), per_packet(b), per_packet(radius)
     t = mix(rng, rng.uniform(-0.5, 1.5, (ROWS, 1)), 0.0, 1.0)
     axis_points = a + t * (b - a)
-    on = axis_points + radius * units(rng)
+    on = axis_points + radius * units(rng, ROWS)
     p = mix(rng, on_surface(rng, anywhere(rng), on), axis_points, a, b)
     return [p, a, b, radius]
 
 
 def cone_case(rng):
     radius = per_packet(rng.uniform(0.2, 2.0, BLOCKS))
-    height = per_packet(mix_packets(rng, rng.uniform(0.2, 3.0, BLOCKS), 1.0))
+    height = per_packet(mix(rng, rng.uniform(0.2, 3.0, BLOCKS), 1.0))
     theta = rng.uniform(0, 2 * np.pi, (ROWS, 1))
     y = height * rng.uniform(0, 1, (ROWS, 1))
     r = radius * (1.0 - y / height)
@@ -208,7 +174,7 @@ def distance_pair_case(rng):
 
 
 def smooth_case(rng):
-    k = per_packet(mix_packets(rng, rng.uniform(0.05, 1.0, BLOCKS), 0.5, 1.0))
+    k = per_packet(mix(rng, rng.uniform(0.05, 1.0, BLOCKS), 0.5, 1.0))
     d1, d2 = distances(rng)
     sign = rng.choice([-1.0, 1.0], size=ROWS)
     # d2 - d1 = +-k and d1 + d2 = +-k: h exactly at 0 or 1, the ends of the blend
@@ -217,7 +183,7 @@ def smooth_case(rng):
 
 
 def translate_case(rng):
-    offset = per_packet(mix_packets(rng, rng.normal(size=(BLOCKS, 3)), 0.0))
+    offset = per_packet(mix(rng, rng.normal(size=(BLOCKS, 3)), 0.0))
     p = anywhere(rng)
     return [mix(rng, p, offset, -offset), offset]
 
@@ -233,7 +199,7 @@ def rotate_case(rng):
 
 
 def scale_case(rng):
-    factor = per_packet(mix_packets(rng, rng.uniform(0.1, 5.0, BLOCKS), 1.0, 2.0, 0.5, 3.0))
+    factor = per_packet(mix(rng, rng.uniform(0.1, 5.0, BLOCKS), 1.0, 2.0, 0.5, 3.0))
     return [anywhere(rng), factor]
 
 
@@ -263,7 +229,7 @@ def repeat_case(rng):
 
 def repeat_axis_limited_case(rng):
     period = per_packet(periods(rng))
-    count = per_packet(pick(rng, COUNTS))
+    count = per_packet(pick(rng, COUNTS, BLOCKS))
     x = mix(rng, rng.normal(size=(ROWS, 1)) * 5, cell_boundaries(rng, period, count),
             cell_boundaries(rng, period), 0.0, rng.uniform(-1e3, 1e3, (ROWS, 1)))
     return [x, period, count]
@@ -278,23 +244,24 @@ def repeat_limited_case(rng):
 
 
 def culling_case(rng):
-    centre = mix_packets(rng, rng.normal(size=(BLOCKS, 3)) * 2, 0.0)
-    radius = mix_packets(rng, rng.uniform(0.1, 2.0, BLOCKS), 1.0)
+    centre = mix(rng, rng.normal(size=(BLOCKS, 3)) * 2, 0.0)
+    radius = mix(rng, rng.uniform(0.1, 2.0, BLOCKS), 1.0)
     sphere = per_packet(np.hstack([centre, radius[:, None]]))
     centre, radius = sphere[:, :3], sphere[:, 3:]
-    u, v = units(rng), units(rng)
+    u, v = units(rng, ROWS), units(rng, ROWS)
     v = v - (v * u).sum(axis=1, keepdims=True) * u             # v perpendicular to u
     v /= np.linalg.norm(v, axis=1, keepdims=True)
     on = centre + radius * u
     # tangent: from a point of the tangent line through `on`, along v, back or away
     tangent_origin = on + rng.uniform(-3, 3, (ROWS, 1)) * v
-    origin = mix(rng, anywhere(rng, 3.0), on, near(rng, on), centre,
+    origin = mix(rng, anywhere(rng, 3.0), on, near(rng, on, NEAR), centre,
                  centre + radius * 0.5 * u, tangent_origin)
     towards = centre - origin
     norm = np.linalg.norm(towards, axis=1, keepdims=True)
-    towards_unit = np.where(norm > 0, towards / np.where(norm > 0, norm, 1.0), units(rng))
+    towards_unit = np.where(norm > 0, towards / np.where(norm > 0, norm, 1.0),
+                            units(rng, ROWS))
     axis = np.eye(3)[rng.integers(3, size=ROWS)] * rng.choice([-1.0, 1.0], (ROWS, 1))
-    direction = mix(rng, units(rng), towards_unit, -towards_unit, v, -v, axis)
+    direction = mix(rng, units(rng, ROWS), towards_unit, -towards_unit, v, -v, axis)
     return [origin, direction, sphere]
 
 
@@ -329,21 +296,6 @@ def camera_case(rng):
 
 # --- The functions and how each is called ------------------------------------------------
 
-# Argument kinds: per-ray values (a packet in the twin) or parameters (scalar in both).
-WIDTHS = {"packet": 1, "vec3p": 3, "real": 1, "vec3": 3, "vec4": 4}
-PER_RAY = {"packet", "vec3p"}
-RESULT_WIDTHS = {"packet": 1, "vec3p": 3, "mask": 1}
-
-
-@dataclass(frozen=True)
-class Case:
-    library: str
-    name: str
-    arguments: tuple[str, ...]
-    result: str
-    inputs: Callable     # rng -> one (ROWS, width) array per argument
-
-
 CASES = [
     Case("sdf", "length2", ("packet", "packet"), "packet", distance_pair_case),
     Case("sdf", "sdf_sphere", ("vec3p", "real"), "packet", sphere_case),
@@ -354,12 +306,10 @@ CASES = [
     Case("sdf", "sdf_capped_cylinder", ("vec3p", "real", "real"), "packet", cylinder_case),
     Case("sdf", "sdf_capsule", ("vec3p", "vec3", "vec3", "real"), "packet", capsule_case),
     Case("sdf", "sdf_cone", ("vec3p", "real", "real"), "packet", cone_case),
-    Case("sdf", "op_union", ("packet", "packet"), "packet", distance_pair_case),
-    Case("sdf", "op_intersection", ("packet", "packet"), "packet", distance_pair_case),
-    Case("sdf", "op_subtraction", ("packet", "packet"), "packet", distance_pair_case),
-    Case("sdf", "op_smooth_union", ("packet", "packet", "real"), "packet", smooth_case),
-    Case("sdf", "op_smooth_subtraction", ("packet", "packet", "real"), "packet", smooth_case),
-    Case("sdf", "op_smooth_intersection", ("packet", "packet", "real"), "packet", smooth_case),
+    *[Case("sdf", name, ("packet", "packet"), "packet", distance_pair_case)
+      for name in ("op_union", "op_intersection", "op_subtraction")],
+    *[Case("sdf", name, ("packet", "packet", "real"), "packet", smooth_case)
+      for name in ("op_smooth_union", "op_smooth_subtraction", "op_smooth_intersection")],
     Case("sdf", "op_translate", ("vec3p", "vec3"), "vec3p", translate_case),
     Case("sdf", "op_rotate", ("vec3p", "vec3", "vec3", "vec3"), "vec3p", rotate_case),
     Case("sdf", "op_scale", ("vec3p", "real"), "vec3p", scale_case),
@@ -373,105 +323,26 @@ CASES = [
 ]
 CASE_IDS = [case.name for case in CASES]
 
-
-def kernel(form: str) -> str:
-    """The kernel ``twin`` that calls every case's function once per row (``form`` "scalar")
-    or once per packet of rows (``form`` "packet"), each on its own input columns, writing
-    each result to its own output columns."""
-    lines, column, out = [], 0, 0
-    for case in CASES:
-        arguments = []
-        for kind in case.arguments:
-            reads = [f"IN({column + i})" for i in range(WIDTHS[kind])]
-            column += WIDTHS[kind]
-            if form == "packet" and kind not in PER_RAY:
-                reads = [f"{r}[0]" for r in reads]          # a parameter: the same in every lane
-            if kind == "vec3p":
-                constructor = "pack3" if form == "packet" else "vec3"
-                arguments.append(f"{constructor}({', '.join(reads)})")
-            elif kind in ("vec3", "vec4"):
-                arguments.append(f"{kind}({', '.join(reads)})")
-            else:
-                arguments.append(reads[0])
-        call = f"{case.name}({', '.join(arguments)})"
-        if case.result == "vec3p":
-            vector = "vec3p" if form == "packet" else "vec3"
-            lines.append(f"    {{ {vector} v = {call};")
-            lines += [f"      OUT({out + i}, v.{c});" for i, c in enumerate("xyz")]
-            lines.append("    }")
-        elif case.result == "mask" and form == "scalar":
-            # a bool here, a -1/0 mask in the packet form: write what the mask would be
-            lines.append(f"    OUT({out}, {call} ? -1.0 : 0.0);")
-        else:
-            lines.append(f"    OUT({out}, {call});")
-        out += RESULT_WIDTHS[case.result]
-    return "\n".join(["__kernel void twin(__global const real* in, __global real* out)", "{",
-                      *lines, "}", ""])
-
-
-def sources(form: str) -> str:
-    names = {}
-    for case in CASES:
-        names.setdefault(case.library, []).append(case.name)
-    suffix = "" if form == "scalar" else "_packet"
-    blocks = [load_library(library + suffix).select(wanted)
-              for library, wanted in names.items()]
-    return "\n".join(blocks + [kernel(form)])
-
-
-def inputs() -> tuple[np.ndarray, dict]:
-    """All cases' input columns side by side, and each case's output columns."""
-    rng = np.random.default_rng(SEED)
-    columns, outputs, out = [], {}, 0
-    for case in CASES:
-        arrays = case.inputs(rng)
-        assert [a.shape for a in arrays] == [(ROWS, WIDTHS[k]) for k in case.arguments], case
-        columns += arrays
-        outputs[case.name] = slice(out, out + RESULT_WIDTHS[case.result])
-        out += RESULT_WIDTHS[case.result]
-    return np.hstack(columns), outputs
-
-
-_RUNS: dict = {}
-
-
-def run_all(device, precision: str):
-    """The scalar and packet outputs of every case at ``precision`` (built once per run)."""
-    if precision not in _RUNS:
-        rows, outputs = inputs()
-        scalar, packet = run_twins(device, precision, sources("scalar"), sources("packet"),
-                                   rows, outputs=sum(RESULT_WIDTHS[c.result] for c in CASES),
-                                   defines=camera_defines())
-        _RUNS[precision] = scalar, packet, outputs
-    return _RUNS[precision]
+TWINS = TwinCases(CASES, SEED, ROWS, defines=camera_defines())
 
 
 # --- Tests --------------------------------------------------------------------------------
 
-@pytest.mark.parametrize("library", list(TWIN_LIBRARIES))
+@pytest.mark.parametrize("library", LIBRARIES)
 def test_every_scalar_function_has_a_packet_twin_of_the_same_name_in_the_same_order(library):
-    scalar = load_library(library).names()
-    packet = load_library(TWIN_LIBRARIES[library]).names()
-    assert packet == scalar
+    assert_twin_names(library)
 
 
-@pytest.mark.parametrize("library", list(TWIN_LIBRARIES))
+@pytest.mark.parametrize("library", LIBRARIES)
 def test_every_packet_twin_is_checked_here(library):
-    checked = [case.name for case in CASES if case.library == library]
-    assert sorted(checked) == sorted(load_library(library).names())
+    TWINS.assert_checks_all(library)
 
 
 @pytest.mark.parametrize("case", CASES, ids=CASE_IDS)
 @pytest.mark.parametrize("precision", PRECISIONS)
 def test_packet_twin_equals_scalar_function_to_the_bit(opencl_device, precision, case):
-    if precision == "float64" and not opencl_device.fp64:
-        pytest.skip(f"{opencl_device.label} has no float64")
-    scalar, packet, outputs = run_all(opencl_device, precision)
-    expected, got = scalar[:, outputs[case.name]], packet[:, outputs[case.name]]
+    need_precision(opencl_device, precision)
+    expected, got = TWINS.results(opencl_device, precision, case.name)
     # the inputs reach more than one result (a constant would hide a broken twin)
     assert all(len(np.unique(column)) > 1 for column in expected.T), case.name
-    np.testing.assert_array_equal(got, expected, err_msg=case.name)
-    # equal values may still differ in sign of zero or NaN payload: compare the bits too
-    bits = np.uint32 if precision == "float32" else np.uint64
-    np.testing.assert_array_equal(got.view(bits), expected.view(bits),
-                                  err_msg=f"{case.name}: same values, different bits")
+    assert_bits_equal(got, expected, case.name)

@@ -20,61 +20,27 @@ its function's columns of the shared run.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Callable
-
 import numpy as np
 import pytest
 
-from gpu_shader.dialects import dialect
-from gpu_shader.library import load_library
-
-from packet_twins import LANES, run_twins      # tests/opencl, on the path as the tests' folder
+# tests/opencl, on the path as the tests' folder
+from packet_twins import (LANES, Case, TwinCases, assert_bits_equal, assert_twin_names, mix,
+                          near, need_precision, normalised, per_packet, pick, units)
 
 SEED = 20240613
 BLOCKS = 96                  # packets of LANES rows; the parameters change from one to the next
 ROWS = BLOCKS * LANES
 PRECISIONS = ["float32", "float64"]
 MAX_DISTANCE = 50.0
+NEAR = (-7, -3)              # `near`: a relative 1e-7..1e-3 off
 
-# scalar library -> its packet twin
-TWIN_LIBRARIES = {"march": "march_packet", "relaxed": "relaxed_packet",
-                  "lights": "lights_packet", "shading": "shading_packet"}
+# the scalar libraries whose packet twins (march_packet, ...) have the same functions; those
+# of march and relaxed are checked by test_packet_march.py, the others here
+LIBRARIES = ["march", "relaxed", "lights", "shading"]
+CHECKED = ["lights", "shading"]
 
 
 # --- Inputs --------------------------------------------------------------------------------
-
-def mix(rng, *options) -> np.ndarray:
-    """Row by row, one of the equally shaped arrays ``options`` (or scalars), at random."""
-    shape = next((np.shape(o) for o in options if np.ndim(o) > 0), (ROWS,))
-    stacked = np.stack([np.broadcast_to(o, shape) for o in options])
-    return stacked[rng.integers(len(options), size=ROWS), np.arange(ROWS)]
-
-
-def per_packet(values) -> np.ndarray:
-    """(BLOCKS, k) values, each repeated for the LANES rows of its packet."""
-    return np.repeat(np.asarray(values, float).reshape(BLOCKS, -1), LANES, axis=0)
-
-
-def pick(rng, choices, shape=BLOCKS) -> np.ndarray:
-    return np.asarray(choices, float)[rng.integers(len(choices), size=shape)]
-
-
-def units(rng, n=ROWS) -> np.ndarray:
-    v = rng.normal(size=(n, 3))
-    return v / np.linalg.norm(v, axis=1, keepdims=True)
-
-
-def normalised(v) -> np.ndarray:
-    return v / np.linalg.norm(v, axis=-1, keepdims=True)
-
-
-def near(rng, values) -> np.ndarray:
-    """Values a relative 1e-7..1e-3 off, either way."""
-    shape = (len(values),) + (1,) * (np.ndim(values) - 1)
-    offset = rng.choice([-1.0, 1.0], size=shape) * 10.0 ** rng.uniform(-7, -3, size=shape)
-    return values * (1.0 + offset)
-
 
 def column(values) -> np.ndarray:
     return np.asarray(values, float).reshape(ROWS, 1)
@@ -87,15 +53,16 @@ def colours(rng) -> np.ndarray:
 def surface_case(rng):
     """n, l, v: l random, grazing (within 1e-2 rad of the tangent plane, or in it), behind
     the surface; v random, on the mirror direction of l (R.V = 1, and H = N), or near it."""
-    n = units(rng)
-    tangent = normalised(np.cross(n, units(rng)))
+    n = units(rng, ROWS)
+    tangent = normalised(np.cross(n, units(rng, ROWS)))
     angle = rng.choice([-1.0, 1.0], (ROWS, 1)) * 10.0 ** rng.uniform(-6, -2, (ROWS, 1))
     grazing = normalised(tangent * np.cos(angle) + n * np.sin(angle))
-    behind = normalised(-n + 0.5 * units(rng))
-    l = mix(rng, units(rng), grazing, tangent, behind, n)
+    behind = normalised(-n + 0.5 * units(rng, ROWS))
+    l = mix(rng, units(rng, ROWS), grazing, tangent, behind, n)
     mirror = 2.0 * (n * l).sum(axis=1, keepdims=True) * n - l
-    v = mix(rng, units(rng), mirror, normalised(mirror + 0.1 * units(rng)),
-            normalised(mirror + 1e-3 * units(rng)), normalised(mirror + 1e-6 * units(rng)),
+    v = mix(rng, units(rng, ROWS), mirror, normalised(mirror + 0.1 * units(rng, ROWS)),
+            normalised(mirror + 1e-3 * units(rng, ROWS)),
+            normalised(mirror + 1e-6 * units(rng, ROWS)),
             n, -l)                                          # -l: L + V = 0, no half vector
     return n, l, v
 
@@ -111,10 +78,10 @@ def specular_case(rng):
 
 
 def toon_case(rng):
-    bands = per_packet(pick(rng, [2.0, 3.0, 4.0, 5.0, 8.0]))
+    bands = per_packet(pick(rng, [2.0, 3.0, 4.0, 5.0, 8.0], BLOCKS))
     k = rng.integers(0, 9, size=(ROWS, 1))
     edges = mix(rng, k / bands, (k + 0.9) / bands, (k + 1.0) / bands)   # q - level = 0, 0.9, 1
-    x = mix(rng, rng.uniform(0, 1, (ROWS, 1)), edges, near(rng, edges), 0.0, 1.0)
+    x = mix(rng, rng.uniform(0, 1, (ROWS, 1)), edges, near(rng, edges, NEAR), 0.0, 1.0)
     return [np.clip(x, 0.0, 1.0), bands]
 
 
@@ -122,7 +89,7 @@ def checker_points(rng):
     scale = column(mix(rng, rng.uniform(0.2, 3.0, ROWS), 0.5, 1.0, 2.0, 0.3))
     p = rng.uniform(-10, 10, (ROWS, 3))
     on = rng.integers(-8, 9, size=(ROWS, 3)) * scale          # on cell boundaries
-    p = mix(rng, p, on, near(rng, on), np.zeros(3), -on)
+    p = mix(rng, p, on, near(rng, on, NEAR), np.zeros(3), -on)
     return p, scale
 
 
@@ -144,32 +111,32 @@ def path_case(rng):
 
 
 def normals_case(rng):
-    n = units(rng)
+    n = units(rng, ROWS)
     axis = np.eye(3)[rng.integers(3, size=ROWS)] * rng.choice([-1.0, 1.0], (ROWS, 1))
     return [mix(rng, n, axis, np.zeros(3), -n * 0.0)]
 
 
 def depth_case(rng):
-    max_distance = per_packet(pick(rng, [MAX_DISTANCE, 20.0, 100.0]))
+    max_distance = per_packet(pick(rng, [MAX_DISTANCE, 20.0, 100.0], BLOCKS))
     t = mix(rng, rng.uniform(0, 120, (ROWS, 1)), -1.0, 0.0, max_distance,
-            near(rng, max_distance))
+            near(rng, max_distance, NEAR))
     return [t, max_distance]
 
 
 def fog_case(rng):
     fog = per_packet(rng.uniform(0, 1, (BLOCKS, 3)))
-    density = per_packet(pick(rng, [0.0, 0.01, 0.05, 0.2, 1.0]))
+    density = per_packet(pick(rng, [0.0, 0.01, 0.05, 0.2, 1.0], BLOCKS))
     t = mix(rng, rng.uniform(0, 100, (ROWS, 1)), rng.uniform(0, 1, (ROWS, 1)), 0.0, 1e3)
     return [colours(rng), t, fog, density]
 
 
 def background_solid_case(rng):
-    return [units(rng), per_packet(rng.uniform(0, 1, (BLOCKS, 3)))]
+    return [units(rng, ROWS), per_packet(rng.uniform(0, 1, (BLOCKS, 3)))]
 
 
 def background_sky_case(rng):
     up = np.eye(3)[1] * rng.choice([-1.0, 1.0], (ROWS, 1))
-    direction = mix(rng, units(rng), up, normalised(units(rng) * [1, 0, 1]))
+    direction = mix(rng, units(rng, ROWS), up, normalised(units(rng, ROWS) * [1, 0, 1]))
     return [direction, per_packet(rng.uniform(0, 1, (BLOCKS, 3))),
             per_packet(rng.uniform(0, 1, (BLOCKS, 3)))]
 
@@ -197,7 +164,7 @@ def cones(rng) -> np.ndarray:
 def spot_cone_case(rng):
     cone = cones(rng)
     edges = mix(rng, cone[:, :1], cone[:, :1] + cone[:, 1:])
-    cos_theta = mix(rng, rng.uniform(-1, 1, (ROWS, 1)), edges, near(rng, edges), 1.0)
+    cos_theta = mix(rng, rng.uniform(-1, 1, (ROWS, 1)), edges, near(rng, edges, NEAR), 1.0)
     return [cos_theta, cone]
 
 
@@ -208,8 +175,8 @@ def light_directional_case(rng):
 
 def light_points(rng):
     position = per_packet(rng.uniform(-5, 5, (BLOCKS, 3)))
-    p = mix(rng, rng.uniform(-8, 8, (ROWS, 3)), position + 1e-3 * units(rng),
-            position + rng.uniform(10, 60, (ROWS, 1)) * units(rng))
+    p = mix(rng, rng.uniform(-8, 8, (ROWS, 3)), position + 1e-3 * units(rng, ROWS),
+            position + rng.uniform(10, 60, (ROWS, 1)) * units(rng, ROWS))
     return p, position, per_packet(rng.uniform(0, 2, (BLOCKS, 3))), attenuation_k(rng)
 
 
@@ -223,7 +190,7 @@ def light_spot_case(rng):
     cone = cones(rng)
     # points on the cone's edges: at angle theta from the axis, cos theta = cone x or x + y
     cos_edge = mix(rng, cone[:, :1], cone[:, :1] + cone[:, 1:])
-    side = normalised(np.cross(axis, units(rng)))
+    side = normalised(np.cross(axis, units(rng, ROWS)))
     sin_edge = np.sqrt(1.0 - cos_edge ** 2)
     on_edge = position + rng.uniform(0.5, 20, (ROWS, 1)) * (cos_edge * axis + sin_edge * side)
     p = mix(rng, p, on_edge, position + 3.0 * axis)
@@ -231,25 +198,6 @@ def light_spot_case(rng):
 
 
 # --- The functions and how each is called ------------------------------------------------
-
-# Argument kinds: per-ray values (a packet in the twin) or parameters (scalar in both).
-WIDTHS = {"packet": 1, "vec3p": 3, "ipacket": 1, "upacket": 1, "real": 1, "vec2": 2,
-          "vec3": 3}
-PER_RAY = {"packet", "vec3p", "ipacket", "upacket"}
-# How a column of reals becomes an argument: scalar form, packet form.
-CONVERSIONS = {"ipacket": ("(int)({})", "convert_ipacket({})"),
-               "upacket": ("(uint)({})", "convert_upacket({})")}
-RESULT_WIDTHS = {"packet": 1, "vec3p": 3, "upacket": 1, "LightSample": 7}
-
-
-@dataclass(frozen=True)
-class Case:
-    library: str
-    name: str
-    arguments: tuple[str, ...]
-    result: str
-    inputs: Callable     # rng -> one (ROWS, width) array per argument
-
 
 CASES = [
     Case("lights", "attenuation", ("packet", "vec3"), "packet", attenuation_case),
@@ -278,101 +226,19 @@ CASES = [
 ]
 CASE_IDS = [case.name for case in CASES]
 
-
-def kernel(form: str) -> str:
-    """The kernel ``twin`` that calls every case's function once per row (``form`` "scalar")
-    or once per packet of rows (``form`` "packet"), each on its own input columns, writing
-    each result to its own output columns."""
-    packet = form == "packet"
-    lines, column_, out = [], 0, 0
-    for case in CASES:
-        arguments = []
-        for kind in case.arguments:
-            reads = [f"IN({column_ + i})" for i in range(WIDTHS[kind])]
-            column_ += WIDTHS[kind]
-            if packet and kind not in PER_RAY:
-                reads = [f"{r}[0]" for r in reads]          # a parameter: the same in every lane
-            if kind == "vec3p":
-                arguments.append(f"{'pack3' if packet else 'vec3'}({', '.join(reads)})")
-            elif kind in ("vec2", "vec3"):
-                arguments.append(f"{kind}({', '.join(reads)})")
-            elif kind in CONVERSIONS:
-                arguments.append(CONVERSIONS[kind][packet].format(reads[0]))
-            else:
-                arguments.append(reads[0])
-        call = f"{case.name}({', '.join(arguments)})"
-        vector = "vec3p" if packet else "vec3"
-        if case.result == "vec3p":
-            lines.append(f"    {{ {vector} v = {call};")
-            lines += [f"      OUT({out + i}, v.{c});" for i, c in enumerate("xyz")]
-            lines.append("    }")
-        elif case.result == "LightSample":
-            lines.append(f"    {{ LightSample s = {call};")
-            lines += [f"      OUT({out + i}, s.to_light.{c});" for i, c in enumerate("xyz")]
-            lines.append(f"      OUT({out + 3}, s.distance);")
-            lines += [f"      OUT({out + 4 + i}, s.radiance.{c});" for i, c in enumerate("xyz")]
-            lines.append("    }")
-        elif case.result == "upacket" and not packet:
-            lines.append(f"    OUT({out}, (real)({call}));")
-        else:
-            lines.append(f"    OUT({out}, {call});")
-        out += RESULT_WIDTHS[case.result]
-    return "\n".join(["__kernel void twin(__global const real* in, __global real* out)", "{",
-                      *lines, "}", ""])
-
-
-def sources(form: str, precision: str) -> str:
-    names = {}
-    for case in CASES:
-        names.setdefault(case.library, []).append(case.name)
-    suffix = "" if form == "scalar" else "_packet"
-    structs = dialect("opencl" if form == "scalar" else "opencl-packets", precision).structs()
-    blocks = [load_library(library + suffix).select(wanted)
-              for library, wanted in names.items()]
-    return "\n".join([structs, *blocks, kernel(form)])
-
-
-def inputs() -> tuple[np.ndarray, dict]:
-    """All cases' input columns side by side, and each case's output columns."""
-    rng = np.random.default_rng(SEED)
-    columns, outputs, out = [], {}, 0
-    for case in CASES:
-        arrays = [np.asarray(a, float) for a in case.inputs(rng)]
-        assert [a.shape for a in arrays] == [(ROWS, WIDTHS[k]) for k in case.arguments], case
-        columns += arrays
-        outputs[case.name] = slice(out, out + RESULT_WIDTHS[case.result])
-        out += RESULT_WIDTHS[case.result]
-    return np.hstack(columns), outputs
-
-
-_RUNS: dict = {}
-
-
-def run_all(device, precision: str):
-    """The scalar and packet outputs of every case at ``precision`` (built once per run)."""
-    if precision not in _RUNS:
-        rows, outputs = inputs()
-        scalar, packet = run_twins(device, precision, sources("scalar", precision),
-                                   sources("packet", precision), rows,
-                                   outputs=sum(RESULT_WIDTHS[c.result] for c in CASES),
-                                   defines={"MAX_DISTANCE": MAX_DISTANCE})
-        _RUNS[precision] = scalar, packet, outputs
-    return _RUNS[precision]
+TWINS = TwinCases(CASES, SEED, ROWS, defines={"MAX_DISTANCE": MAX_DISTANCE}, structs=True)
 
 
 # --- Tests --------------------------------------------------------------------------------
 
-@pytest.mark.parametrize("library", list(TWIN_LIBRARIES))
+@pytest.mark.parametrize("library", LIBRARIES)
 def test_every_scalar_function_has_a_packet_twin_of_the_same_name_in_the_same_order(library):
-    scalar = load_library(library).names()
-    packet = load_library(TWIN_LIBRARIES[library]).names()
-    assert packet == scalar
+    assert_twin_names(library)
 
 
-@pytest.mark.parametrize("library", ["lights", "shading"])
+@pytest.mark.parametrize("library", CHECKED)
 def test_every_packet_twin_is_checked_here(library):
-    checked = [case.name for case in CASES if case.library == library]
-    assert sorted(checked) == sorted(load_library(library).names())
+    TWINS.assert_checks_all(library)
 
 
 # Where the packet program calls a vector math function, PoCL's vector code is not its
@@ -393,14 +259,6 @@ POW = {"specular_phong", "specular_blinn_phong"}
 EXP = {"apply_fog"}
 
 
-def assert_bits_equal(got, expected, what):
-    np.testing.assert_array_equal(got, expected, err_msg=what)
-    # equal values may still differ in sign of zero or NaN payload: compare the bits too
-    bits = np.uint32 if expected.dtype == np.float32 else np.uint64
-    np.testing.assert_array_equal(got.view(bits), expected.view(bits),
-                                  err_msg=f"{what}: same values, different bits")
-
-
 def assert_pow_close(got, expected, what):
     """Bit-equal where the scalar result is 0 or normal; one subnormal step off below."""
     finfo = np.finfo(expected.dtype)
@@ -412,10 +270,8 @@ def assert_pow_close(got, expected, what):
 @pytest.mark.parametrize("case", CASES, ids=CASE_IDS)
 @pytest.mark.parametrize("precision", PRECISIONS)
 def test_packet_twin_equals_scalar_function_to_the_bit(opencl_device, precision, case):
-    if precision == "float64" and not opencl_device.fp64:
-        pytest.skip(f"{opencl_device.label} has no float64")
-    scalar, packet, outputs = run_all(opencl_device, precision)
-    expected, got = scalar[:, outputs[case.name]], packet[:, outputs[case.name]]
+    need_precision(opencl_device, precision)
+    expected, got = TWINS.results(opencl_device, precision, case.name)
     # the inputs reach more than one result (a constant would hide a broken twin), except
     # where a function's result is a parameter (light_directional: only the distance)
     varied = [len(np.unique(c)) > 1 for c in expected.T]
@@ -434,11 +290,9 @@ def test_packet_twin_equals_scalar_function_to_the_bit(opencl_device, precision,
 def test_the_specular_inputs_reach_the_hard_cases(opencl_device, precision):
     """Highlights at full strength, lights grazing or behind the surface (0), and values
     between: else a wrong power or a wrong N.L test could pass unnoticed."""
-    if precision == "float64" and not opencl_device.fp64:
-        pytest.skip(f"{opencl_device.label} has no float64")
-    scalar, _, outputs = run_all(opencl_device, precision)
+    need_precision(opencl_device, precision)
     for name in sorted(POW):
-        values = scalar[:, outputs[name]][:, 0]
+        values = TWINS.results(opencl_device, precision, name)[0][:, 0]
         assert (values == 0).mean() > 0.2, name
         assert (values > 0.99).sum() > 50, name
         assert ((values > 1e-3) & (values < 0.9)).sum() > 50, name
