@@ -131,7 +131,7 @@ class _Generator:
 
     def file(self, name: str) -> str:
         """Where the building blocks ``name`` come from, for the program's section titles."""
-        return f"glsl/{name}_packet.cl" if self.d.packets else f"glsl/{name}.glsl"
+        return self.d.library(name).file
 
     # --- parameters that every program has --------------------------------------------------
 

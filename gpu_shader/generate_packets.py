@@ -46,7 +46,8 @@ class PacketGenerator(_Generator):
         return "\n".join(lines)
 
     def material_code(self) -> str:
-        """Material rows per object id, gathered per lane, and ``surface_albedo``."""
+        """Material rows per object id, gathered per lane, and (with checkers)
+        ``surface_albedo`` and ``surface_checker_parity`` over the gathered rows."""
         first, stride, rows = self.material_rows()
         lines = [
             rows,
@@ -63,19 +64,15 @@ class PacketGenerator(_Generator):
             "    }",
             "    vec3p xyz = pack3(vload_packet(0, x), vload_packet(0, y), vload_packet(0, z));",
             "    return pack4(xyz, vload_packet(0, w));",
-            "}", "",
-            "vec3p surface_albedo(vec3p p, ipacket id)", "{"]
+            "}", ""]
         if self.checker:
-            lines += ["    vec4p a = material(id, 2);",
-                      "    vec4p b = material(id, 3);",
-                      "    return choose(b.w > 0.0, checker(p, a.xyz, b.xyz, a.w), material(id, 0).xyz);",
+            # shade_* gathers each row once and passes the rows on.
+            lines += ["vec3p surface_albedo(vec3p p, vec4p row0, vec4p row2, vec4p row3)", "{",
+                      "    return choose(row3.w > 0.0, checker(p, row2.xyz, row3.xyz, row2.w), row0.xyz);",
                       "}", "",
-                      "packet surface_checker_parity(vec3p p, ipacket id)", "{",
-                      "    packet scale = material(id, 2).w;",
-                      "    return material(id, 3).w > 0.0 ? checker_parity(p, scale) : (packet)(0.0);"]
-        else:
-            lines += ["    return material(id, 0).xyz;"]
-        lines += ["}", ""]
+                      "packet surface_checker_parity(vec3p p, vec4p row2, vec4p row3)", "{",
+                      "    return row3.w > 0.0 ? checker_parity(p, row2.w) : (packet)(0.0);",
+                      "}", ""]
         return "\n".join(lines)
 
     def light_code(self) -> tuple[str, list[str]]:
@@ -87,15 +84,21 @@ class PacketGenerator(_Generator):
                  "// for the lanes in `live`. Returns (colour, features): features codes the checker",
                  "// cell and, one bit per light, whether a hard shadow blocked it (for the path label).",
                  f"vec4p shade_{mode}(vec3p p, vec3p n, vec3p v, ipacket id, ipacket live)", "{",
-                 "    vec4p row1 = material(id, 1);",
-                 "    vec3p albedo = surface_albedo(p, id);",
-                 "    packet ka = material(id, 0).w;",
-                 "    packet kd = row1.xyz.x;",
+                 "    vec4p row0 = material(id, 0);",
+                 "    vec4p row1 = material(id, 1);"]
+        if self.checker:
+            lines += ["    vec4p row2 = material(id, 2);",
+                      "    vec4p row3 = material(id, 3);",
+                      "    vec3p albedo = surface_albedo(p, row0, row2, row3);"]
+        else:
+            lines += ["    vec3p albedo = row0.xyz;"]
+        lines += ["    packet ka = row0.w;",
+                  "    packet kd = row1.xyz.x;",
                  "    packet ks = row1.xyz.y;",
                  "    packet shininess = row1.xyz.z;",
                  "    vec3p color = mul(mul(ka, albedo), AMBIENT);",
                  "    packet features = "
-                 + ("surface_checker_parity(p, id);" if self.checker else "0.0;"),
+                 + ("surface_checker_parity(p, row2, row3);" if self.checker else "0.0;"),
                  "    packet visible;",
                  "    LightSample s;"]
         for i, light in enumerate(self.scene.lights):

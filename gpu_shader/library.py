@@ -33,6 +33,7 @@ class Library:
     """The functions of one building-block file, in file order, and the file's header comment."""
     header: str
     functions: tuple[Function, ...]
+    file: str = ""                      # where it comes from, "glsl/sdf.glsl"
 
     def names(self) -> list[str]:
         return [f.name for f in self.functions]
@@ -61,7 +62,9 @@ def load_library(name: str) -> Library:
     """Parse ``glsl/<name>.glsl`` (or, for OpenCL-only blocks, ``glsl/<name>.cl``) into its
     functions."""
     path = GLSL_DIR / f"{name}.glsl"
-    text = (path if path.exists() else GLSL_DIR / f"{name}.cl").read_text()
+    if not path.exists():
+        path = GLSL_DIR / f"{name}.cl"
+    text = path.read_text()
     blocks = _split_blocks(text)
     header, blocks = blocks[0], blocks[1:]
     names = [_DEFINITION.search(b).group(1) for b in blocks]
@@ -70,7 +73,7 @@ def load_library(name: str) -> Library:
         body = block[block.index("{"):]
         calls = {w for w in _WORD.findall(body) if w in names and w != name_}
         functions.append(Function(name_, block, frozenset(calls)))
-    return Library(header, tuple(functions))
+    return Library(header, tuple(functions), f"{GLSL_DIR.name}/{path.name}")
 
 
 def _split_blocks(text: str) -> list[str]:
