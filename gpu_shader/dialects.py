@@ -35,11 +35,14 @@ class Dialect:
     struct: Callable[[str, tuple], str]           # a struct declaration
     to_real: Callable[[str], str]                 # int expression -> real
     to_int: Callable[[str], str]                  # real expression -> int
-    declare_parameters: Callable[[int, int], str] # how the program receives U and P
+    declare_parameters: Callable[[int, int, int], str]  # how the program receives U and P
     real_dtype: np.dtype                          # precision of `real`
     entry: str                                    # the entry point file in glsl/
     finish: Callable[[str], str] = lambda source: source   # last rewrite of the whole text
     packets: bool = False                         # one packet of rays per work-item?
+    # The vertex shader that goes with the program (GLSL), given the same three numbers as
+    # declare_parameters; "" for the plain full-screen triangle or no vertex stage.
+    vertex_shader: Callable[[int, int, int], str] = lambda rows, fixed, flat_rows: ""
 
     def library(self, name: str):
         """The building blocks ``glsl/<name>.glsl``, or their packet twins
@@ -63,15 +66,38 @@ def _glsl_struct(name: str, fields) -> str:
 # the array out of its registers): large scenes read everything from the uniform buffer.
 MAX_PRIVATE_ROWS = 256
 
+# Up to this many fixed rows reach the fragment shader as flat varyings: GL_MAX_VARYING_VECTORS
+# of llvmpipe and of NVIDIA's driver (the renderer lowers it where its context allows fewer).
+MAX_FLAT_ROWS = 32
 
-def _glsl_parameters(rows: int, fixed: int) -> str:
-    if fixed > MAX_PRIVATE_ROWS:
-        return f"""\
+_UNIFORM_BLOCK = """\
 layout(std140) uniform Parameters
 {{
     vec4 U[{rows}];
 }};
+"""
 
+
+def _glsl_parameters(rows: int, fixed: int, flat_rows: int) -> str:
+    """The uniform block U and, for the first ``fixed`` rows, P: flat varyings (up to
+    ``flat_rows`` rows), a private copy, or U itself."""
+    block = _UNIFORM_BLOCK.format(rows=rows)
+    if fixed <= flat_rows:
+        return block + f"""
+// The first {fixed} rows, read with fixed indices (camera, settings, SDF tree, lights), reach
+// every pixel as flat varyings that the vertex shader copies from U (glsl/fullscreen.vert).
+// llvmpipe reads a uniform buffer lane by lane, one bounds-checked load per pixel of its
+// 8-wide vectors, even at a fixed index; a flat input costs one load per block of pixels.
+// Copying the rows per pixel into a private array (what larger scenes do) made the
+// classroom scene's draw a fifth slower. Materials, read by object id, stay in U.
+flat in vec4 P[{fixed}];
+
+void load_parameters()
+{{
+}}
+"""
+    if fixed > MAX_PRIVATE_ROWS:
+        return block + f"""
 // {fixed} rows are read with fixed indices: too many to copy per pixel (more than
 // {MAX_PRIVATE_ROWS}), so P is the uniform buffer itself.
 #define P U
@@ -80,17 +106,12 @@ void load_parameters()
 {{
 }}
 """
-    return f"""\
-layout(std140) uniform Parameters
-{{
-    vec4 U[{rows}];
-}};
-
+    return block + f"""
 // The first {fixed} rows, read with fixed indices (camera, settings, SDF tree, lights), are
-// copied once per pixel into the private array P. llvmpipe re-reads and bounds-checks a
-// uniform buffer at every use, which made the march loop three times slower; a GPU keeps
-// a private array read with constant indices in registers. Materials, read by object id,
-// stay in U.
+// more than fit in flat varyings ({flat_rows}), so they are copied once per pixel into the
+// private array P. llvmpipe re-reads and bounds-checks a uniform buffer at every use,
+// which made the march loop three times slower; a GPU keeps a private array read with
+// constant indices in registers. Materials, read by object id, stay in U.
 vec4 P[{fixed}];
 
 void load_parameters()
@@ -100,6 +121,17 @@ void load_parameters()
     }}
 }}
 """
+
+
+def glsl_vertex_shader(rows: int, fixed: int, flat_rows: int) -> str:
+    """The vertex shader for a fragment shader from `_glsl_parameters`: the full-screen
+    triangle, copying the first ``fixed`` of ``rows`` rows into flat varyings when they fit
+    (``fixed <= flat_rows``); "" (the plain triangle) otherwise."""
+    text = (GLSL_DIR / "fullscreen.vert").read_text()
+    if fixed > flat_rows:
+        return ""
+    version, rest = text.split("\n", 1)
+    return f"{version}\n#define ROWS {rows}\n#define FLAT_ROWS {fixed}\n{rest}"
 
 
 GLSL = Dialect(
@@ -119,7 +151,8 @@ GLSL = Dialect(
     struct=_glsl_struct,
     to_real=lambda expr: f"float({expr})",
     to_int=lambda expr: f"int({expr})",
-    declare_parameters=lambda rows, fixed: _glsl_parameters(rows, fixed),
+    declare_parameters=_glsl_parameters,
+    vertex_shader=glsl_vertex_shader,
     real_dtype=np.dtype(np.float32),
     entry="main.frag",
 )
@@ -262,7 +295,7 @@ def _opencl(real: str, dtype, packets: bool = False) -> Dialect:
         struct=_opencl_packet_struct if packets else _opencl_struct,
         to_real=lambda expr: f"(real)({expr})",
         to_int=lambda expr: f"(int)({expr})",
-        declare_parameters=lambda rows, fixed: _OPENCL_PARAMETERS,
+        declare_parameters=lambda rows, fixed, flat_rows: _OPENCL_PARAMETERS,
         real_dtype=np.dtype(dtype),
         entry="main_packet.cl" if packets else "main.cl",
         finish=thread_parameters,

@@ -31,7 +31,7 @@ from reference_cpu.culling import culled_bounds
 from reference_cpu.normals import STENCILS
 from reference_cpu.relaxation import SLOPE_WEIGHT
 
-from .dialects import Dialect
+from .dialects import MAX_FLAT_ROWS, Dialect
 from .dialects import dialect as get_dialect
 from .library import GLSL_DIR, load_library
 from .parameters import ParameterBlock
@@ -55,18 +55,24 @@ class Program:
         What the program's ``P`` must hold for this scene and image size.
     features : tuple of str
         What was emitted ("sdf_sphere", "shadows:hard", "fog", ...), sorted.
+    vertex_source : str
+        The vertex shader that goes with a GLSL ``source`` when it needs its own (it hands on
+        parameter rows as flat varyings); "" for the plain full-screen triangle.
     """
     source: str
     parameters: np.ndarray
     features: tuple[str, ...]
+    vertex_source: str = ""
 
 
 def generate(scene: Scene, width: int, height: int, dialect: str = "glsl",
-             precision: str = "float32") -> Program:
+             precision: str = "float32", flat_rows: int = MAX_FLAT_ROWS) -> Program:
     """Generate the program that renders ``scene`` at ``width`` x ``height``.
 
     ``dialect`` is "glsl" (a fragment shader) or "opencl" (a kernel); ``precision`` the
-    meaning of ``real`` ("float64" only in OpenCL).
+    meaning of ``real`` ("float64" only in OpenCL). In GLSL, up to ``flat_rows`` parameter
+    rows read with fixed indices reach the fragment shader as flat varyings (the context's
+    GL_MAX_VARYING_VECTORS at most).
     """
     try:
         language = get_dialect(dialect, precision)
@@ -75,12 +81,13 @@ def generate(scene: Scene, width: int, height: int, dialect: str = "glsl",
     if language.packets:
         from .generate_packets import PacketGenerator
         return PacketGenerator(scene, language).program(width, height)
-    return _Generator(scene, language).program(width, height)
+    return _Generator(scene, language, flat_rows).program(width, height)
 
 
 class _Generator:
-    def __init__(self, scene: Scene, dialect: Dialect):
+    def __init__(self, scene: Scene, dialect: Dialect, flat_rows: int = 0):
         self.scene, self.s, self.d = scene, scene.render, dialect
+        self.flat_rows = flat_rows
         self.block = ParameterBlock()
         self.features: set[str] = set()
         self.primitives = list(primitives(scene.objects))
@@ -120,14 +127,15 @@ class _Generator:
         parts.append(("the per-pixel pipeline (reference_cpu/render.py)", self.pixel_code()))
         entry = self.d.entry
         parts.append((f"the entry point (glsl/{entry})", (GLSL_DIR / entry).read_text()))
-        rows = max(1, len(self.block.rows))
+        rows, fixed = max(1, len(self.block.rows)), max(1, fixed)
         head = [self.d.prelude, _banner("parameters: one vec4 row each, set per frame")
-                + self.d.declare_parameters(rows, max(1, fixed))]
+                + self.d.declare_parameters(rows, fixed, self.flat_rows)]
         head.append(self.block.defines())
         head.append(self.d.structs())
         body = [_banner(title) + text for title, text in parts if text]
         source = self.d.finish("\n".join(head + body))
-        return Program(source, self.block.values(np.float64), tuple(sorted(self.features)))
+        return Program(source, self.block.values(np.float64), tuple(sorted(self.features)),
+                       self.d.vertex_shader(rows, fixed, self.flat_rows))
 
     def file(self, name: str) -> str:
         """Where the building blocks ``name`` come from, for the program's section titles."""

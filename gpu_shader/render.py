@@ -20,6 +20,7 @@ from marchlab.frame import Frame
 from marchlab.scene import Scene
 
 from .context import gl_context, renderer_name
+from .dialects import MAX_FLAT_ROWS
 from .generate import Program, generate
 from .library import GLSL_DIR
 from .planes import frame_from_planes, row_bands
@@ -69,13 +70,14 @@ class Renderer:
 
     def __init__(self, ctx):
         self.ctx = ctx
-        self.programs: OrderedDict[str, tuple] = OrderedDict()
+        self.programs: OrderedDict[tuple[str, str], tuple] = OrderedDict()
         self.targets: dict[tuple[int, int], tuple] = {}
         self.max_block = int(ctx.info["GL_MAX_UNIFORM_BLOCK_SIZE"])
+        self.flat_rows = min(MAX_FLAT_ROWS, int(ctx.info.get("GL_MAX_VARYING_VECTORS", 0)))
 
     def render(self, scene: Scene, width: int, height: int, progress=None) -> Frame:
-        return self.render_program(scene, generate(scene, width, height), width, height,
-                                   progress)
+        program = generate(scene, width, height, flat_rows=self.flat_rows)
+        return self.render_program(scene, program, width, height, progress)
 
     def render_program(self, scene: Scene, generated: Program, width: int, height: int,
                        progress=None) -> Frame:
@@ -87,7 +89,7 @@ class Renderer:
                 f"the scene needs {parameters.nbytes} bytes of shader parameters; this OpenGL "
                 f"allows {self.max_block} in a uniform block (fewer objects or lights)")
         with self.ctx:           # make our context current: the process may hold others
-            program, vao = self._program(generated.source)
+            program, vao = self._program(generated.source, generated.vertex_source)
             fbo = self.target(width, height)
             return self._draw(scene, program, vao, fbo, parameters, width, height, progress)
 
@@ -117,22 +119,24 @@ class Renderer:
             progress(stop * width, height * width)
         self.ctx.scissor = None
 
-    def program(self, source: str):
-        """The compiled program for ``source``, from the cache when it was seen before."""
+    def program(self, source: str, vertex: str = ""):
+        """The compiled program for a fragment shader ``source`` and its ``vertex`` shader
+        ("" for the plain full-screen triangle), from the cache when seen before."""
         with self.ctx:           # a `with` does not nest: exiting restores the previous one
-            return self._program(source)
+            return self._program(source, vertex)
 
-    def _program(self, source: str):
-        if source in self.programs:
-            self.programs.move_to_end(source)
-            return self.programs[source]
-        vertex = (GLSL_DIR / "fullscreen.vert").read_text()
+    def _program(self, source: str, vertex: str = ""):
+        key = (vertex, source)
+        if key in self.programs:
+            self.programs.move_to_end(key)
+            return self.programs[key]
+        vertex = vertex or (GLSL_DIR / "fullscreen.vert").read_text()
         try:
             program = self.ctx.program(vertex_shader=vertex, fragment_shader=source)
         except Exception as err:
             raise ShaderCompileError(compile_message(str(err), source)) from None
         vao = self.ctx.vertex_array(program, [])
-        self.programs[source] = (program, vao)
+        self.programs[key] = (program, vao)
         if len(self.programs) > PROGRAM_CACHE_SIZE:
             _, (old, old_vao) = self.programs.popitem(last=False)
             old_vao.release()

@@ -38,7 +38,7 @@ from reference_cpu.culling import MAX_CULLED, culled_bounds
 from reference_cpu.normals import STENCILS
 
 from .context import renderer_name
-from .dialects import dialect
+from .dialects import GLSL, MAX_FLAT_ROWS
 from .generate import Program, generate
 from .library import GLSL_DIR, load_library
 from .parameters import ParameterBlock
@@ -141,7 +141,8 @@ def uber_program(scene: Scene, width: int, height: int) -> Program:
         rows[at:at + OBJECT_STRIDE] = record
         at = MATERIALS_START + MATERIAL_STRIDE * i
         rows[at:at + MATERIAL_STRIDE] = _material_rows(scene.materials[primitive.material])
-    return Program(_source(block), rows, FEATURES)
+    return Program(_source(block), rows, FEATURES,
+                   GLSL.vertex_shader(ROWS, HEADER_ROWS, MAX_FLAT_ROWS))
 
 
 def _header(scene: Scene, width: int, height: int) -> ParameterBlock:
@@ -245,7 +246,7 @@ def _material_rows(m) -> list[list[float]]:
 
 def _source(block: ParameterBlock) -> str:
     """The program text: the same for every scene, as only the header's names reach it."""
-    glsl = dialect("glsl")
+    glsl = GLSL
     sdf_needs = [f"sdf_{n[6:].lower()}" for n in SHAPES.values()]
     sdf_needs += ["op_union", "op_translate", "op_rotate", "op_scale"]
     shading = ["diffuse", "specular_phong", "specular_blinn_phong", "toon_band", "checker",
@@ -272,8 +273,8 @@ def _source(block: ParameterBlock) -> str:
     ]
     head = [glsl.prelude,
             _banner(f"parameters: {ROWS} rows whatever the scene; the first {HEADER_ROWS} (camera, "
-                    "settings, normal stencil) are copied to P, the tables are read from U")
-            + glsl.declare_parameters(ROWS, HEADER_ROWS),
+                    "settings, normal stencil) are P, the tables are read from U")
+            + glsl.declare_parameters(ROWS, HEADER_ROWS, MAX_FLAT_ROWS),
             block.defines(),
             _banner("codes of the run-time switches and the table layout") + layout,
             glsl.structs()]
@@ -344,7 +345,7 @@ class _DrawTimer:
 
     def __init__(self, ctx, fbo, program: Program, width: int, height: int):
         self.ctx, self.fbo, self.size = ctx, fbo, (width, height)
-        vertex = (GLSL_DIR / "fullscreen.vert").read_text()
+        vertex = program.vertex_source or (GLSL_DIR / "fullscreen.vert").read_text()
         start = time.perf_counter()
         try:
             self.program = ctx.program(vertex_shader=vertex, fragment_shader=program.source)

@@ -107,7 +107,8 @@ def test_moving_an_object_reuses_the_program_and_moves_the_image(gpu):
     first = marchlab.render(left, width, height, backend="gpu")
     after_first = len(programs)
     second = marchlab.render(right, width, height, backend="gpu")
-    assert generate(left, width, height).source in programs
+    program = generate(left, width, height)
+    assert (program.vertex_source, program.source) in programs
     assert after_first - before in (0, 1)      # 0 if an earlier test compiled this structure
     assert len(programs) == after_first        # the move compiled nothing
     # The ball's centre projects to column W/2 + x * (H/2) / (z tan(fov/2)) - 0.5.
@@ -137,7 +138,7 @@ def test_compile_error_quotes_the_broken_line(gpu, marker):
     message = str(caught.value)
     assert f"line {number}: {line}" in message
     assert isinstance(caught.value, MarchlabError)
-    assert text not in gpu_render._renderer().programs
+    assert all(text not in key for key in gpu_render._renderer().programs)
 
 
 def test_compile_error_of_one_line_source_quotes_line_1(gpu):
@@ -286,3 +287,48 @@ def test_scene_too_large_for_a_private_copy_reads_the_buffer_and_matches_the_ref
     assert frame.hit.sum() > 0.5 * frame.hit.size
     c = compare_frames(reference, frame, epsilon=scene.render.epsilon)
     assert failures(c, gates_against("float32")) == []
+
+
+# --- how the parameters reach the fragment shader -------------------------------------------
+
+FRAME_BUFFERS = ("color", "depth", "normal", "steps", "object_id", "hit", "path")
+
+
+@pytest.mark.parametrize("scene_name", ["classroom", "csg"])
+def test_parameters_as_flat_varyings_or_a_private_copy_give_the_same_frame_to_the_bit(
+        gpu, scene_name):
+    """Flat varyings (rows that fit, the default) and the per-pixel private copy are two ways
+    of delivering the same numbers: every buffer must agree to the bit. csg needs 32 rows,
+    exactly MAX_FLAT_ROWS."""
+    from gpu_shader.dialects import MAX_FLAT_ROWS
+    from gpu_shader.render import render_program
+    from marchlab.shapes import primitives
+
+    scene = marchlab.load_scene(scene_name)
+    flat = generate(scene, 48, 36)
+    private = generate(scene, 48, 36, flat_rows=0)
+    rows = len(private.parameters) - 4 * len(list(primitives(scene.objects)))
+    assert rows <= MAX_FLAT_ROWS
+    assert f"flat in vec4 P[{rows}];" in flat.source and f"#define FLAT_ROWS {rows}" in flat.vertex_source
+    assert f"vec4 P[{rows}];" in private.source and "flat in" not in private.source
+    assert private.vertex_source == ""
+    a = render_program(scene, flat, 48, 36)
+    b = render_program(scene, private, 48, 36)
+    assert a.hit.any()
+    for name in FRAME_BUFFERS:
+        assert np.array_equal(getattr(a, name), getattr(b, name), equal_nan=True), name
+
+
+def test_a_scene_with_more_fixed_rows_than_flat_varyings_copies_them_per_pixel(gpu):
+    """primitives reads 40 rows with fixed indices, more than MAX_FLAT_ROWS: the program falls
+    back to the private copy with the plain vertex shader, and the renderer draws it."""
+    from gpu_shader.dialects import MAX_FLAT_ROWS
+
+    scene = marchlab.load_scene("primitives")
+    program = generate(scene, 32, 24)
+    assert "flat in" not in program.source and program.vertex_source == ""
+    assert "P[i] = U[i];" in program.source
+    assert MAX_FLAT_ROWS < len(program.parameters)
+    frame = marchlab.render(scene, 32, 24, backend="gpu")
+    assert frame.hit.any()
+    assert gpu_render._renderer().flat_rows <= MAX_FLAT_ROWS

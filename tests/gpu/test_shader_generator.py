@@ -230,9 +230,9 @@ def test_every_parameter_index_is_inside_the_declared_block(name):
     program = generate(SCENES[name], WIDTH, HEIGHT)
     source = program.source
     rows = int(re.search(r"^\s*vec4 U\[(\d+)\];", source, re.M).group(1))
-    fixed = int(re.search(r"^vec4 P\[(\d+)\];", source, re.M).group(1))
+    fixed = int(re.search(r"^(?:flat in )?vec4 P\[(\d+)\];", source, re.M).group(1))
     assert program.parameters.shape == (rows, 4)
-    body = re.sub(r"^\s*vec4 [PU]\[\d+\];$", "", source, flags=re.M)   # drop declarations
+    body = re.sub(r"^\s*(?:flat in )?vec4 [PU]\[\d+\];$", "", source, flags=re.M)   # drop declarations
     p_indices = [int(i) for i in re.findall(r"\bP\[(\d+)\]", body)]
     u_indices = [int(i) for i in re.findall(r"\bU\[(\d+)\]", body)]
     assert p_indices, "the camera rows, at least, are read through P"
