@@ -1,7 +1,8 @@
 """The GPU backend: draw the generated fragment shader and read every buffer back.
 
-One full-screen draw writes three RGBA32F render targets (colour and hit, normal and depth,
-steps and object id); reading them back gives the same `Frame` the NumPy reference returns.
+One full-screen draw writes three render targets (colour and hit, normal and depth in RGBA32F;
+steps, object id and path label in RGBA32I); reading them back gives the same `Frame` the
+NumPy reference returns.
 GL row r holds image row r counted from the top, so the read-back needs no flip.
 Programs are cached by their text, which depends only on the scene's structure: a new
 camera or a moved object only rewrites the parameter buffer.
@@ -101,12 +102,14 @@ class Renderer:
             fbo.use()
             fbo.viewport = (0, 0, width, height)
             self.draw(vao, width, height, progress)
-            planes = np.empty((3, height, width, 4), np.float32)
-            for i in range(3):
-                fbo.read_into(planes[i], components=4, attachment=i, dtype="f4")
+            floats = np.empty((2, height, width, 4), np.float32)
+            integers = np.empty((height, width, 4), np.int32)
+            for i in range(2):
+                fbo.read_into(floats[i], components=4, attachment=i, dtype="f4")
+            fbo.read_into(integers, components=4, attachment=2, dtype="i4")
         finally:
             buffer.release()
-        return frame_from_planes(planes, scene, "gpu", "float32")
+        return frame_from_planes((*floats, integers), scene, "gpu", "float32")
 
     def draw(self, vao, width, height, progress):
         if progress is None:
@@ -144,10 +147,12 @@ class Renderer:
         return program, vao
 
     def target(self, width: int, height: int):
-        """A framebuffer of three RGBA32F textures of the given size (kept for reuse)."""
+        """A framebuffer of the given size (kept for reuse): two RGBA32F textures and one
+        RGBA32I, the planes of `gpu_shader.planes`."""
         key = (width, height)
         if key not in self.targets:
-            textures = [self.ctx.texture((width, height), 4, dtype="f4") for _ in range(3)]
+            textures = [self.ctx.texture((width, height), 4, dtype=dtype)
+                        for dtype in ("f4", "f4", "i4")]
             self.targets[key] = self.ctx.framebuffer(color_attachments=textures)
         return self.targets[key]
 

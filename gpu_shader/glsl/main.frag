@@ -1,9 +1,10 @@
 // The fragment shader's entry point: one invocation per pixel. It writes every buffer of a
-// marchlab Frame into three RGBA32F render targets in one draw.
+// marchlab Frame into three render targets in one draw: two RGBA32F, and one RGBA32I for the
+// integers, which the Frame then uses as they are read back (no conversion per pixel).
 
 layout(location = 0) out vec4 out_color;     // rgb: colour in [0, 1], a: 1 on a hit
 layout(location = 1) out vec4 out_normal;    // xyz: unit normal, w: depth t (inf on a miss)
-layout(location = 2) out vec4 out_steps;     // x: SDF evaluations, y: object id (-1),
+layout(location = 2) out ivec4 out_steps;    // x: SDF evaluations, y: object id (-1),
                                              // z: path label (24 bits, exact in a float)
 
 void main()
@@ -28,5 +29,5 @@ void main()
 
     out_color = vec4(clamp(color_path.xyz, 0.0, 1.0), float(h.hit));
     out_normal = vec4(n, h.hit == 1 ? h.t : INFINITY);
-    out_steps = vec4(float(h.steps), float(id), color_path.w, 0.0);
+    out_steps = ivec4(h.steps, id, int(color_path.w), 0);
 }
