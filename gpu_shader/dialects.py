@@ -24,6 +24,9 @@ from .library import GLSL_DIR, load_library
 STRUCTS = {
     "Hit": (("real", "t"), ("int", "steps"), ("int", "hit")),
     "LightSample": (("vec3", "to_light"), ("real", "distance"), ("vec3", "radiance")),
+    # What a pixel's trace returns: colour and path label, and the primary ray's march,
+    # normal and object id (the Frame's other buffers).
+    "Pixel": (("vec4", "color_path"), ("Hit", "primary"), ("vec3", "normal"), ("int", "id")),
 }
 
 
@@ -233,7 +236,8 @@ typedef {unsigned}{n} upacket;
 
 
 # Struct fields in a packet program: one value per ray.
-_PACKET_FIELD_TYPES = {"real": "packet", "int": "ipacket", "vec3": "vec3p"}
+_PACKET_FIELD_TYPES = {"real": "packet", "int": "ipacket", "vec3": "vec3p", "vec4": "vec4p",
+                      "Hit": "Hit"}
 
 
 def _opencl_packet_struct(name: str, fields) -> str:

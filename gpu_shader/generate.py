@@ -8,7 +8,7 @@ The program is assembled in the order a reader meets it:
 3. the march and the shadow function the settings ask for, ``estimate_normal`` for the
    chosen stencil;
 4. lights of the kinds present, the shading model, checker, fog and background only if used;
-5. ``pixel_color``, the per-pixel pipeline of `reference_cpu.render`, then the entry point.
+5. ``trace``, the per-pixel pipeline of `reference_cpu.render`, then the entry point.
 
 Every number that a frame may change is in the parameter block (`gpu_shader.parameters`), so
 the text depends only on the scene's structure, and a program cache keyed by the text never
@@ -383,6 +383,13 @@ class _Generator:
     # --- the per-pixel pipeline -----------------------------------------------------------------
 
     def pixel_code(self) -> str:
+        """``trace``, the whole pixel: glsl/trace.glsl's around a generated ``pixel_color``,
+        or, with mirrors, a generated one whose reflection loop marches the camera ray too."""
+        if self.s.shading in LIT_MODES and self.reflections:
+            return self.reflection_trace_code()
+        return self.pixel_color_code() + "\n" + self.d.library("trace").select(["trace"])
+
+    def pixel_color_code(self) -> str:
         mode = self.s.shading
         head = ["// The colour of one pixel and its path label, given its primary ray, the march",
                 "// result h and, on a hit, the normal n and object id there",
@@ -401,32 +408,46 @@ class _Generator:
         return "\n".join(head + [f"    return vec4({color}, {path});", "}", ""])
 
     def lit_pixel_code(self, head: list[str]) -> str:
-        """Shading, fog and (if any material is a mirror) source 000's reflection loop."""
+        """Shading and fog of the primary hit (no mirrors: one bounce)."""
+        shade = f"shade_{self.s.shading}(p, n, -d, id)"
+        fog = ["    shaded = apply_fog(shaded, h.t, FOG_COLOR, FOG_DENSITY);"] if self.fog else []
+        to_real = self.d.to_real
+        return "\n".join(head + [
+            "    if (h.hit == 0) {",
+            f"        return vec4(background(direction), {to_real('path_step(0u, -1, 0u)')});",
+            "    }",
+            "    vec3 d = direction;",
+            "    precise vec3 p = origin + h.t * d;",
+            f"    vec4 lit = {shade};",
+            "    vec3 shaded = lit.xyz;"] + fog + [
+            f"    return vec4(shaded, {to_real('path_step(0u, id, uint(lit.w))')});", "}", ""])
+
+    def reflection_trace_code(self) -> str:
+        """``trace`` with source 000's reflection loop, the camera ray its first bounce."""
+        self.features.add("reflections")
         shade = f"shade_{self.s.shading}(p, n, -d, id)"
         fog = ["        shaded = apply_fog(shaded, h.t, FOG_COLOR, FOG_DENSITY);"] if self.fog else []
-        to_real = self.d.to_real
-        if not self.reflections:
-            return "\n".join(head + [
-                "    if (h.hit == 0) {",
-                f"        return vec4(background(direction), {to_real('path_step(0u, -1, 0u)')});",
-                "    }",
-                "    vec3 d = direction;",
-                "    precise vec3 p = origin + h.t * d;",
-                f"    vec4 lit = {shade};",
-                "    vec3 shaded = lit.xyz;"] + [f[4:] for f in fog] + [
-                f"    return vec4(shaded, {to_real('path_step(0u, id, uint(lit.w))')});", "}", ""])
-        self.features.add("reflections")
-        lines = head + [
-            "    // Each bounce adds its shaded colour weighted by the product of the kr seen",
-            "    // so far; a ray that hits nothing adds the background.",
+        return "\n".join([
+            "// One pixel, from its camera ray to everything the Frame holds (reference_cpu/render.py,",
+            "// Tracer.trace and lit_color). Each bounce marches its ray, shades the hit and adds",
+            "// the colour weighted by the product of the kr seen so far; a ray that hits nothing",
+            "// adds the background. Bounce 0 is the camera ray: its march, normal and object id",
+            "// are the pixel's primary buffers. (The reference marches the camera ray first, then",
+            "// loops; here the loop does it, so that llvmpipe, which runs every statement of a",
+            "// loop body for a whole block of pixels, never runs a march or a normal twice.)",
+            "Pixel trace(vec3 origin, vec3 direction)", "{",
+            "    Pixel px;",
+            "    px.normal = vec3(0.0);",
+            "    px.id = -1;",
             "    vec3 color = vec3(0.0);",
             "    uint path = 0u;",
             "    real weight = 1.0;",
             "    vec3 o = origin;",
             "    vec3 d = direction;",
             "    for (int bounce = 0; bounce <= REFLECTION_DEPTH; bounce++) {",
-            "        if (bounce > 0) {",
-            "            h = march(o, d, MAX_DISTANCE);",
+            "        Hit h = march(o, d, MAX_DISTANCE);",
+            "        if (bounce == 0) {",
+            "            px.primary = h;",
             "        }",
             "        if (h.hit == 0) {",
             "            color = color + weight * background(d);",
@@ -434,9 +455,11 @@ class _Generator:
             "            break;",
             "        }",
             "        precise vec3 p = o + h.t * d;",
-            "        if (bounce > 0) {",
-            "            n = estimate_normal(p);",
-            "            id = scene_object_id(p);",
+            "        vec3 n = estimate_normal(p);",
+            "        int id = scene_object_id(p);",
+            "        if (bounce == 0) {",
+            "            px.normal = n;",
+            "            px.id = id;",
             "        }",
             f"        vec4 lit = {shade};",
             "        vec3 shaded = lit.xyz;"] + fog + [
@@ -450,8 +473,8 @@ class _Generator:
             "        o = p + SURFACE_OFFSET * n;",
             "        d = reflect(d, n);",
             "    }",
-            f"    return vec4(color, {self.d.to_real('path')});", "}", ""]
-        return "\n".join(lines)
+            f"    px.color_path = vec4(color, {self.d.to_real('path')});",
+            "    return px;", "}", ""])
 
 
 def _banner(title: str) -> str:

@@ -269,6 +269,7 @@ def _source(block: ParameterBlock) -> str:
         ("shading (glsl/shading.glsl)", load_library("shading").select(shading)),
         ("normals, lights, materials and shading by run-time switches (glsl/uber.glsl)",
          uber.select(["estimate_normal", "pixel_color"], provided=set(SCENE_FUNCTIONS))),
+        ("the pixel, from its camera ray (glsl/trace.glsl)", load_library("trace").select(["trace"])),
         ("the entry point (glsl/main.frag)", (GLSL_DIR / glsl.entry).read_text()),
     ]
     head = [glsl.prelude,

@@ -24,19 +24,11 @@ __kernel void render(PARAMETERS,
     real x = (real)(column) + 0.5;
     real y = (real)(row) + 0.5;
     vec3 direction = camera_ray(x, y);
-    Hit h = march(CAMERA_POSITION, direction, MAX_DISTANCE);
+    Pixel px = trace(CAMERA_POSITION, direction);
 
-    vec3 n = vec3(0.0);
-    int id = -1;
-    if (h.hit == 1) {
-        precise vec3 p = CAMERA_POSITION + h.t * direction;
-        n = estimate_normal(p);
-        id = scene_object_id(p);
-    }
-    vec4 color_path = pixel_color(CAMERA_POSITION, direction, h, n, id);
-
+    Hit h = px.primary;
     int pixel = row * (int)(IMAGE_WIDTH) + column;
-    color_hit[pixel] = vec4(clamp(color_path.xyz, 0.0, 1.0), (real)(h.hit));
-    normal_depth[pixel] = vec4(n, h.hit == 1 ? h.t : INFINITY);
-    steps_id[pixel] = vec4((real)(h.steps), (real)(id), color_path.w, 0.0);
+    color_hit[pixel] = vec4(clamp(px.color_path.xyz, 0.0, 1.0), (real)(h.hit));
+    normal_depth[pixel] = vec4(px.normal, h.hit == 1 ? h.t : INFINITY);
+    steps_id[pixel] = vec4((real)(h.steps), (real)(px.id), px.color_path.w, 0.0);
 }

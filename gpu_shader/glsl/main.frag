@@ -16,18 +16,10 @@ void main()
     real x = gl_FragCoord.x;
     real y = gl_FragCoord.y;
     vec3 direction = camera_ray(x, y);
-    Hit h = march(CAMERA_POSITION, direction, MAX_DISTANCE);
+    Pixel px = trace(CAMERA_POSITION, direction);
 
-    vec3 n = vec3(0.0);
-    int id = -1;
-    if (h.hit == 1) {
-        precise vec3 p = CAMERA_POSITION + h.t * direction;
-        n = estimate_normal(p);
-        id = scene_object_id(p);
-    }
-    vec4 color_path = pixel_color(CAMERA_POSITION, direction, h, n, id);
-
-    out_color = vec4(clamp(color_path.xyz, 0.0, 1.0), float(h.hit));
-    out_normal = vec4(n, h.hit == 1 ? h.t : INFINITY);
-    out_steps = ivec4(h.steps, id, int(color_path.w), 0);
+    Hit h = px.primary;
+    out_color = vec4(clamp(px.color_path.xyz, 0.0, 1.0), float(h.hit));
+    out_normal = vec4(px.normal, h.hit == 1 ? h.t : INFINITY);
+    out_steps = ivec4(h.steps, px.id, int(px.color_path.w), 0);
 }

@@ -81,7 +81,8 @@ FEATURE_SWITCHES = {
                    {"light_directional"}, {"light:spot"}, {"light:directional"}, None),
     "toon": (["render.shading=toon"], {"toon_band", "shade_toon"}, {"shade_phong"},
              {"shading:toon"}, {"shading:phong"}, None),
-    "mirror": (["render.reflection_depth=1", "materials.default.kr=0.5"], set(), set(),
+    # With a mirror, trace is generated around the reflection loop: no pixel_color.
+    "mirror": (["render.reflection_depth=1", "materials.default.kr=0.5"], set(), {"pixel_color"},
                {"reflections"}, set(), REFLECTION_LOOP),
 }
 
