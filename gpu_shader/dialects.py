@@ -18,7 +18,7 @@ from typing import Callable
 
 import numpy as np
 
-from .library import GLSL_DIR, load_library
+from .library import glsl_file, load_library
 
 # Structs shared by every dialect: name -> ((type, field), ...).
 STRUCTS = {
@@ -130,7 +130,7 @@ def glsl_vertex_shader(rows: int, fixed: int, flat_rows: int) -> str:
     """The vertex shader for a fragment shader from `_glsl_parameters`: the full-screen
     triangle, copying the first ``fixed`` of ``rows`` rows into flat varyings when they fit
     (``fixed <= flat_rows``); "" (the plain triangle) otherwise."""
-    text = (GLSL_DIR / "fullscreen.vert").read_text()
+    text = glsl_file("fullscreen.vert")
     if fixed > flat_rows:
         return ""
     version, rest = text.split("\n", 1)
@@ -231,7 +231,7 @@ typedef {unsigned}{n} upacket;
 // Lane k of a packet holds the ray of the k-th pixel of the work-item's run.
 #define LANE_INDEX ((ipacket)({", ".join(str(k) for k in range(n))}))
 """
-    library = (GLSL_DIR / "packet.cl").read_text()
+    library = glsl_file("packet.cl")
     return _opencl_prelude(real) + types + "\n" + library
 
 

@@ -33,7 +33,7 @@ from reference_cpu.relaxation import SLOPE_WEIGHT
 
 from .dialects import MAX_FLAT_ROWS, Dialect
 from .dialects import dialect as get_dialect
-from .library import GLSL_DIR, load_library
+from .library import glsl_file
 from .parameters import ParameterBlock
 from .sdf_code import PACKET_TYPES, SCALAR_TYPES, scene_sdf_code
 
@@ -126,7 +126,7 @@ class _Generator:
             parts.insert(-1, ("materials, indexed by object id", self.material_code()))
         parts.append(("the per-pixel pipeline (reference_cpu/render.py)", self.pixel_code()))
         entry = self.d.entry
-        parts.append((f"the entry point (glsl/{entry})", (GLSL_DIR / entry).read_text()))
+        parts.append((f"the entry point (glsl/{entry})", glsl_file(entry)))
         rows, fixed = max(1, len(self.block.rows)), max(1, fixed)
         head = [self.d.prelude, _banner("parameters: one vec4 row each, set per frame")
                 + self.d.declare_parameters(rows, fixed, self.flat_rows)]

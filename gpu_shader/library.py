@@ -58,6 +58,12 @@ class Library:
 
 
 @cache
+def glsl_file(name: str) -> str:
+    """The text of ``glsl/<name>`` (an entry point, the vertex shader, ...), read once."""
+    return (GLSL_DIR / name).read_text()
+
+
+@cache
 def load_library(name: str) -> Library:
     """Parse ``glsl/<name>.glsl`` (or, for OpenCL-only blocks, ``glsl/<name>.cl``) into its
     functions."""

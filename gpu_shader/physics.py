@@ -46,7 +46,7 @@ from physics.errors import PhysicsError
 from physics.events import EVENT_DTYPE
 
 from .context import gl_context
-from .library import GLSL_DIR
+from .library import glsl_file
 
 MAX_CONTACTS = 24        # per body and step: 12 touching equal spheres, walls, and room
 MAX_ITERATIONS = 64      # World.iterations allowed on the GPU (sizes the counter buffer)
@@ -83,7 +83,7 @@ def shader_source() -> str:
     """The compute shader's text: glsl/physics_step.glsl after its version and sizes."""
     return (f"#version 430\n#define MAX_CONTACTS {MAX_CONTACTS}\n"
             f"#define MAX_ITERATIONS {MAX_ITERATIONS}\n"
-            + (GLSL_DIR / "physics_step.glsl").read_text())
+            + glsl_file("physics_step.glsl"))
 
 
 class GpuStepper:

@@ -23,7 +23,7 @@ from marchlab.scene import Scene
 from .context import gl_context, renderer_name
 from .dialects import MAX_FLAT_ROWS
 from .generate import Program, generate
-from .library import GLSL_DIR
+from .library import glsl_file
 from .planes import frame_from_planes, row_bands
 
 PROGRAM_CACHE_SIZE = 32
@@ -133,7 +133,7 @@ class Renderer:
         if key in self.programs:
             self.programs.move_to_end(key)
             return self.programs[key]
-        vertex = vertex or (GLSL_DIR / "fullscreen.vert").read_text()
+        vertex = vertex or glsl_file("fullscreen.vert")
         try:
             program = self.ctx.program(vertex_shader=vertex, fragment_shader=source)
         except Exception as err:

@@ -40,7 +40,7 @@ from reference_cpu.normals import STENCILS
 from .context import renderer_name
 from .dialects import GLSL, MAX_FLAT_ROWS
 from .generate import Program, generate
-from .library import GLSL_DIR, load_library
+from .library import glsl_file, load_library
 from .parameters import ParameterBlock
 from .render import ShaderCompileError, _renderer, compile_message
 from .sdf_code import primitive_parameters, transform_parameters
@@ -270,7 +270,7 @@ def _source(block: ParameterBlock) -> str:
         ("normals, lights, materials and shading by run-time switches (glsl/uber.glsl)",
          uber.select(["estimate_normal", "pixel_color"], provided=set(SCENE_FUNCTIONS))),
         ("the pixel, from its camera ray (glsl/trace.glsl)", load_library("trace").select(["trace"])),
-        ("the entry point (glsl/main.frag)", (GLSL_DIR / glsl.entry).read_text()),
+        ("the entry point (glsl/main.frag)", glsl_file(glsl.entry)),
     ]
     head = [glsl.prelude,
             _banner(f"parameters: {ROWS} rows whatever the scene; the first {HEADER_ROWS} (camera, "
@@ -346,7 +346,7 @@ class _DrawTimer:
 
     def __init__(self, ctx, fbo, program: Program, width: int, height: int):
         self.ctx, self.fbo, self.size = ctx, fbo, (width, height)
-        vertex = program.vertex_source or (GLSL_DIR / "fullscreen.vert").read_text()
+        vertex = program.vertex_source or glsl_file("fullscreen.vert")
         start = time.perf_counter()
         try:
             self.program = ctx.program(vertex_shader=vertex, fragment_shader=program.source)
