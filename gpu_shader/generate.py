@@ -41,6 +41,9 @@ LIT_MODES = ("phong", "blinn_phong", "toon")
 SPECULAR = {"phong": "specular_phong", "blinn_phong": "specular_blinn_phong",
             "toon": "specular_phong"}
 LIGHT_KINDS = {DirectionalLight: "directional", PointLight: "point", SpotLight: "spot"}
+# March hard shadow rays toward two lights in one loop (glsl/shadow_pair.glsl) where a scene
+# allows it; tests turn it off to check that it changes no pixel.
+PAIR_SHADOW_RAYS = True
 
 
 @dataclass(frozen=True)
@@ -97,6 +100,13 @@ class _Generator:
                             and any(m.kr > 0 for m in self.materials))
         self.fog = self.s.fog.density > 0 and self.s.shading in LIT_MODES
         self.types = PACKET_TYPES if dialect.packets else SCALAR_TYPES
+        # Hard shadow rays toward two lights are marched together (hard_shadow_pair): one
+        # program with one ray per pixel and plain sphere tracing (relaxed shadow rays keep
+        # the relaxed march of their own).
+        self.shadow_pairs = (PAIR_SHADOW_RAYS and not dialect.packets
+                             and self.s.shading in LIT_MODES
+                             and self.s.shadows == "hard" and self.s.relaxation == "none"
+                             and len(scene.lights) >= 2)
 
     def program(self, width: int, height: int) -> Program:
         self.settings_rows(width, height)
@@ -222,12 +232,14 @@ class _Generator:
         wanted = ["diffuse", SPECULAR[mode]] + background[1]
         wanted += ["toon_band"] * (mode == "toon") + ["checker"] * self.checker + ["path_step"]
         wanted += ["apply_fog"] * self.fog
+        pairs = ([(f"shadow rays toward two lights at once ({self.file('shadow_pair')})",
+                   self.d.library("shadow_pair").select(["hard_shadow_pair"]))]
+                 if self.shadow_pairs else [])
         return [
             (f"lights ({self.file('lights')})", self.d.library("lights").select(light_needs)),
             (f"shading ({self.file('shading')})", shading_lib.select(wanted)),
             ("the background", background[0]),
-            (f"the {mode} model over the scene's lights", light_source),
-        ]
+        ] + pairs + [(f"the {mode} model over the scene's lights", light_source)]
 
     def material_rows(self) -> tuple[int, int, str]:
         """Append each object's material rows; return the first row, the rows per object
@@ -280,12 +292,23 @@ class _Generator:
                  f"    real features = {'surface_checker_parity(p, id)' if self.checker else '0.0'};",
                  "    real visible;",
                  "    LightSample s;"]
-        for i, light in enumerate(self.scene.lights):
-            kind, call = self.light_call(i, light)
+        calls = [self.light_call(i, light) for i, light in enumerate(self.scene.lights)]
+        pairs = range(0, len(calls) - 1, 2) if self.shadow_pairs else range(0)
+        if self.shadow_pairs:
+            lines.append("    // The lights' samples first: their hard shadow rays are marched two by two.")
+            lines += [f"    LightSample s{i} = {call};" for i, (_, call) in enumerate(calls)]
+            lines += [f"    vec2 visible{i}{i + 1} = lights_visible(p, n, s{i}, s{i + 1});"
+                      for i in pairs]
+        for i, (kind, call) in enumerate(calls):
             needs.add(f"light_{kind}")
-            lines += [f"    // light {i}: {kind}", f"    s = {call};"]
+            lines.append(f"    // light {i}: {kind}")
+            lines.append(f"    s = {f's{i}' if self.shadow_pairs else call};")
             if self.s.shadows != "none":
-                lines.append("    visible = light_visible(p, n, s);")
+                if i in pairs or i - 1 in pairs:
+                    pair = i - i % 2
+                    lines.append(f"    visible = visible{pair}{pair + 1}.{'xy'[i % 2]};")
+                else:
+                    lines.append("    visible = light_visible(p, n, s);")
                 lines.append("    s.radiance = visible * s.radiance;")
                 blocked = "(visible == 0.0 ? 1.0 : 0.0)" if self.s.shadows == "hard" else "0.0"
                 lines.append(f"    features = 2.0 * features + {blocked};")
@@ -337,19 +360,35 @@ class _Generator:
         return kind, f"light_spot(p, {L}POSITION, {L}RADIANCE, {L}ATTENUATION, {L}AXIS, {L}CONE)"
 
     def shadow_code(self) -> str:
-        return "\n".join([
+        lines = [
+            "// Whether light s needs a shadow ray at p: points facing away from the light, or",
+            "// where it sends nothing, need none, as their diffuse and specular terms are zero",
+            "// whatever the visibility (taken as 1).",
+            "bool needs_shadow_ray(vec3 n, LightSample s)",
+            "{",
+            "    return dot(n, s.to_light) > 0.0 && max(s.radiance.x, max(s.radiance.y, s.radiance.z)) > 0.0;",
+            "}",
+            "",
             "// How much of light s reaches p: shadow rays start SURFACE_OFFSET off the surface",
-            "// (else they find the surface itself: shadow acne). Points facing away from the",
-            "// light, or where it sends nothing, need no shadow ray: their diffuse and",
-            "// specular terms are zero whatever the visibility, taken as 1.",
+            "// (else they find the surface itself: shadow acne).",
             "real light_visible(vec3 p, vec3 n, LightSample s)",
             "{",
-            "    if (!(dot(n, s.to_light) > 0.0 && max(s.radiance.x, max(s.radiance.y, s.radiance.z)) > 0.0)) {",
+            "    if (!needs_shadow_ray(n, s)) {",
             "        return 1.0;",
             "    }",
             "    vec3 origin = p + SURFACE_OFFSET * n;",
             f"    return {self.s.shadows}_shadow(origin, s.to_light, s.distance);",
-            "}", ""])
+            "}", ""]
+        if self.shadow_pairs:
+            lines += [
+                "// light_visible for lights a and b, their shadow rays marched together.",
+                "vec2 lights_visible(vec3 p, vec3 n, LightSample a, LightSample b)",
+                "{",
+                "    vec3 origin = p + SURFACE_OFFSET * n;",
+                "    return hard_shadow_pair(origin, a.to_light, a.distance, needs_shadow_ray(n, a),",
+                "                            b.to_light, b.distance, needs_shadow_ray(n, b));",
+                "}", ""]
+        return "\n".join(lines)
 
     def background_code(self) -> tuple[str, list[str]]:
         bg = self.s.background

@@ -67,10 +67,10 @@ def test_sphere_only_program_holds_no_unused_building_block(sphere_file):
 # (--set overrides, functions added, functions removed, features added, features removed,
 #  text that must appear)
 FEATURE_SWITCHES = {
-    "soft shadows": (["render.shadows=soft"], {"soft_shadow", "light_visible"}, set(),
-                     {"shadows:soft"}, set(), None),
-    "hard shadows": (["render.shadows=hard"], {"hard_shadow", "light_visible"}, set(),
-                     {"shadows:hard"}, set(), None),
+    "soft shadows": (["render.shadows=soft"], {"soft_shadow", "light_visible", "needs_shadow_ray"},
+                     set(), {"shadows:soft"}, set(), None),
+    "hard shadows": (["render.shadows=hard"], {"hard_shadow", "light_visible", "needs_shadow_ray"},
+                     set(), {"shadows:hard"}, set(), None),
     "fog": (["render.fog.density=0.1"], {"apply_fog"}, set(), {"fog"}, set(), None),
     "checker": (["materials.default.checker.scale=0.5"],
                 {"checker", "checker_parity", "surface_checker_parity"}, set(),
