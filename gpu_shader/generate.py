@@ -107,6 +107,9 @@ class _Generator:
                              and self.s.shading in LIT_MODES
                              and self.s.shadows == "hard" and self.s.relaxation == "none"
                              and len(scene.lights) >= 2)
+        # A light marched alone (light_visible and the march's own shadow function): all of
+        # them without pairs, the last of an odd number with pairs.
+        self.lone_shadows = not self.shadow_pairs or len(scene.lights) % 2 == 1
 
     def program(self, width: int, height: int) -> Program:
         self.settings_rows(width, height)
@@ -181,7 +184,7 @@ class _Generator:
         """The march (plain or relaxed) and the shadow function the settings ask for."""
         needs = ["march"]
         if self.s.shading in LIT_MODES and self.s.shadows != "none" and self.scene.lights:
-            needs.append(f"{self.s.shadows}_shadow")
+            needs += [f"{self.s.shadows}_shadow"] * self.lone_shadows
             self.features.add(f"shadows:{self.s.shadows}")
         mode = self.s.relaxation
         if mode == "none":
@@ -368,20 +371,21 @@ class _Generator:
             "{",
             "    return dot(n, s.to_light) > 0.0 && max(s.radiance.x, max(s.radiance.y, s.radiance.z)) > 0.0;",
             "}",
-            "",
-            "// How much of light s reaches p: shadow rays start SURFACE_OFFSET off the surface",
-            "// (else they find the surface itself: shadow acne).",
-            "real light_visible(vec3 p, vec3 n, LightSample s)",
-            "{",
-            "    if (!needs_shadow_ray(n, s)) {",
-            "        return 1.0;",
-            "    }",
-            "    vec3 origin = p + SURFACE_OFFSET * n;",
-            f"    return {self.s.shadows}_shadow(origin, s.to_light, s.distance);",
-            "}", ""]
+            ""]
+        origin = ["// Shadow rays start SURFACE_OFFSET off the surface (else they find the surface",
+                  "// itself: shadow acne)."]
+        if self.lone_shadows:
+            lines += ["// How much of light s reaches p."] + origin + [
+                "real light_visible(vec3 p, vec3 n, LightSample s)",
+                "{",
+                "    if (!needs_shadow_ray(n, s)) {",
+                "        return 1.0;",
+                "    }",
+                "    vec3 origin = p + SURFACE_OFFSET * n;",
+                f"    return {self.s.shadows}_shadow(origin, s.to_light, s.distance);",
+                "}", ""]
         if self.shadow_pairs:
-            lines += [
-                "// light_visible for lights a and b, their shadow rays marched together.",
+            lines += ["// How much of lights a and b reaches p, their shadow rays marched together."] + origin + [
                 "vec2 lights_visible(vec3 p, vec3 n, LightSample a, LightSample b)",
                 "{",
                 "    vec3 origin = p + SURFACE_OFFSET * n;",

@@ -34,7 +34,7 @@ def test_shader_prints_a_whole_program(capsys):
     assert code == 0 and err == ""
     assert out.startswith("#version 330")
     assert "void main()" in out and re.search(r"^real scene_sdf\(vec3 p\)", out, re.M)
-    assert "hard_shadow(" in out and "apply_fog(" in out      # classroom's hard shadows, fog
+    assert "hard_shadow_pair(" in out and "apply_fog(" in out   # classroom's hard shadows, fog
 
 
 def test_shader_set_changes_the_program_as_the_scene_file_would(capsys):

@@ -317,3 +317,34 @@ def test_generated_text_is_the_same_under_any_hash_seed():
                               text=True, timeout=60, check=True)
         digests.add(done.stdout.strip())
     assert len(digests) == 1
+
+
+# (scene, overrides) -> (shadow functions defined, shadow functions not defined)
+SHADOW_PAIRING = {
+    "two lights: one pair": ("classroom", [], {"hard_shadow_pair", "lights_visible"},
+                             {"light_visible", "hard_shadow"}),
+    "three lights: a pair and one alone": ("lights", [],
+                                           {"hard_shadow_pair", "lights_visible",
+                                            "light_visible", "hard_shadow"}, set()),
+    "soft shadows: no pairs": ("classroom", ["render.shadows=soft"],
+                               {"light_visible", "soft_shadow"},
+                               {"hard_shadow_pair", "lights_visible", "hard_shadow"}),
+    "relaxed marching: no pairs": ("classroom", ["render.relaxation=auto"],
+                                   {"light_visible", "hard_shadow"},
+                                   {"hard_shadow_pair", "lights_visible"}),
+}
+
+
+@pytest.mark.parametrize("case", list(SHADOW_PAIRING))
+def test_hard_shadow_rays_are_paired_where_the_march_allows_and_nothing_unused_is_emitted(case):
+    """Pairs only with hard shadows and plain marching, in the one-ray programs; a function
+    only where it is called (a scene whose lights are all paired has no light_visible)."""
+    name, overrides, present, absent = SHADOW_PAIRING[case]
+    for dialect in ("glsl", "opencl"):
+        source = generate(load_scene(name, overrides), WIDTH, HEIGHT, dialect=dialect).source
+        defined = defined_functions(source)
+        assert present <= defined and not absent & defined, (dialect, defined & (present | absent))
+        for function in defined & (present | absent | {"needs_shadow_ray"}):
+            assert len(re.findall(rf"\b{function}\s*\(", source)) >= 2, function   # called
+    packets = generate(load_scene(name, overrides), WIDTH, HEIGHT, dialect="opencl-packets")
+    assert not {"hard_shadow_pair", "lights_visible"} & defined_functions(packets.source)
