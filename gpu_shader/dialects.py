@@ -130,10 +130,9 @@ def glsl_vertex_shader(rows: int, fixed: int, flat_rows: int) -> str:
     """The vertex shader for a fragment shader from `_glsl_parameters`: the full-screen
     triangle, copying the first ``fixed`` of ``rows`` rows into flat varyings when they fit
     (``fixed <= flat_rows``); "" (the plain triangle) otherwise."""
-    text = glsl_file("fullscreen.vert")
     if fixed > flat_rows:
         return ""
-    version, rest = text.split("\n", 1)
+    version, rest = glsl_file("fullscreen.vert").split("\n", 1)
     return f"{version}\n#define ROWS {rows}\n#define FLAT_ROWS {fixed}\n{rest}"
 
 
