@@ -309,6 +309,9 @@ def test_parameters_as_flat_varyings_or_a_private_copy_give_the_same_frame_to_th
     private = generate(scene, 48, 36, flat_rows=0)
     rows = len(private.parameters) - 4 * len(list(primitives(scene.objects)))
     assert rows <= MAX_FLAT_ROWS
+    if rows > gpu_render._renderer().flat_rows:
+        pytest.skip(f"this OpenGL passes {gpu_render._renderer().flat_rows} flat varyings, "
+                    f"{scene_name} needs {rows}")
     assert f"flat in vec4 P[{rows}];" in flat.source and f"#define FLAT_ROWS {rows}" in flat.vertex_source
     assert f"vec4 P[{rows}];" in private.source and "flat in" not in private.source
     assert private.vertex_source == ""
