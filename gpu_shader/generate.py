@@ -100,16 +100,15 @@ class _Generator:
                             and any(m.kr > 0 for m in self.materials))
         self.fog = self.s.fog.density > 0 and self.s.shading in LIT_MODES
         self.types = PACKET_TYPES if dialect.packets else SCALAR_TYPES
-        # Hard shadow rays toward two lights are marched together (hard_shadow_pair): one
+        # Hard shadow rays toward two lights are marched together (hard_shadow_pair) in a
         # program with one ray per pixel and plain sphere tracing (relaxed shadow rays keep
-        # the relaxed march of their own).
-        self.shadow_pairs = (PAIR_SHADOW_RAYS and not dialect.packets
-                             and self.s.shading in LIT_MODES
-                             and self.s.shadows == "hard" and self.s.relaxation == "none"
-                             and len(scene.lights) >= 2)
-        # A light marched alone (light_visible and the march's own shadow function): all of
-        # them without pairs, the last of an odd number with pairs.
-        self.lone_shadows = not self.shadow_pairs or len(scene.lights) % 2 == 1
+        # the relaxed march of their own): lights 0 .. paired_lights - 1, two by two. The
+        # last of an odd number, or every light without pairs, is marched alone.
+        lights = len(scene.lights)
+        pairs = (PAIR_SHADOW_RAYS and not dialect.packets and self.s.shading in LIT_MODES
+                 and self.s.shadows == "hard" and self.s.relaxation == "none")
+        self.paired_lights = lights - lights % 2 if pairs else 0
+        self.lone_shadows = self.paired_lights < lights
 
     def program(self, width: int, height: int) -> Program:
         self.settings_rows(width, height)
@@ -237,7 +236,7 @@ class _Generator:
         wanted += ["apply_fog"] * self.fog
         pairs = ([(f"shadow rays toward two lights at once ({self.file('shadow_pair')})",
                    self.d.library("shadow_pair").select(["hard_shadow_pair"]))]
-                 if self.shadow_pairs else [])
+                 if self.paired_lights else [])
         return [
             (f"lights ({self.file('lights')})", self.d.library("lights").select(light_needs)),
             (f"shading ({self.file('shading')})", shading_lib.select(wanted)),
@@ -296,20 +295,20 @@ class _Generator:
                  "    real visible;",
                  "    LightSample s;"]
         calls = [self.light_call(i, light) for i, light in enumerate(self.scene.lights)]
-        pairs = range(0, len(calls) - 1, 2) if self.shadow_pairs else range(0)
-        if self.shadow_pairs:
+        paired = self.paired_lights
+        if paired:
             lines.append("    // The lights' samples first: their hard shadow rays are marched two by two.")
             lines += [f"    LightSample s{i} = {call};" for i, (_, call) in enumerate(calls)]
             lines += [f"    vec2 visible{i}{i + 1} = lights_visible(p, n, s{i}, s{i + 1});"
-                      for i in pairs]
+                      for i in range(0, paired, 2)]
         for i, (kind, call) in enumerate(calls):
             needs.add(f"light_{kind}")
             lines.append(f"    // light {i}: {kind}")
-            lines.append(f"    s = {f's{i}' if self.shadow_pairs else call};")
+            lines.append(f"    s = {f's{i}' if paired else call};")
             if self.s.shadows != "none":
-                if i in pairs or i - 1 in pairs:
-                    pair = i - i % 2
-                    lines.append(f"    visible = visible{pair}{pair + 1}.{'xy'[i % 2]};")
+                if i < paired:
+                    first = i - i % 2
+                    lines.append(f"    visible = visible{first}{first + 1}.{'xy'[i % 2]};")
                 else:
                     lines.append("    visible = light_visible(p, n, s);")
                 lines.append("    s.radiance = visible * s.radiance;")
@@ -384,7 +383,7 @@ class _Generator:
                 "    vec3 origin = p + SURFACE_OFFSET * n;",
                 f"    return {self.s.shadows}_shadow(origin, s.to_light, s.distance);",
                 "}", ""]
-        if self.shadow_pairs:
+        if self.paired_lights:
             lines += ["// How much of lights a and b reaches p, their shadow rays marched together."] + origin + [
                 "vec2 lights_visible(vec3 p, vec3 n, LightSample a, LightSample b)",
                 "{",
