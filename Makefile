@@ -19,7 +19,9 @@ SYSTEM_PACKAGES := libegl1 libegl-mesa0 libgl1-mesa-dri pocl-opencl-icd ocl-icd-
 demo: $(VENV)/.installed
 	$(BIN)/marchlab render classroom -o out/classroom.png
 
+# lint-imports checks the four floors (pyproject.toml, [tool.importlinter]) before the suite.
 test: $(VENV)/.installed-test
+	$(BIN)/lint-imports
 	$(BIN)/python -m pytest
 
 # The test environment holds the docs extra and everything the lessons import, which the

@@ -37,7 +37,7 @@ def primary_rays_only(scene):
 def render_with(backend: str):
     """A function (scene, width, height, precision) -> Frame for a row of the table.
 
-    "opencl one-ray" is the opencl backend's one-ray program (`reference_cpu.opencl.render`
+    "opencl one-ray" is the opencl backend's one-ray program (`gpu_shader.opencl.render`
     with packets=False), timed beside the packet program it ships with."""
     if backend == ONE_RAY:
         from reference_cpu import opencl
@@ -128,7 +128,7 @@ def device(backend: str) -> str:
         from gpu_shader.render import device_name
         return f"OpenGL renderer {device_name()}"
     if backend in ("opencl", ONE_RAY):
-        from reference_cpu.opencl import device_name
+        from gpu_shader.opencl import device_name
         return f"OpenCL device {device_name()}"
     return cpu_name()
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import os
 
-from marchlab.errors import MarchlabError
+from scene_model.errors import MarchlabError
 
 ENV_DEVICE = "MARCHLAB_GL_DEVICE"
 MAX_DEVICES = 16

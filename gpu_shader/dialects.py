@@ -200,7 +200,7 @@ vec3 reflect(vec3 i, vec3 n)
 {
     return i - 2.0 * dot(n, i) * n;
 }
-// normalize as the reference computes it, v / sqrt(v . v) (marchlab.geometry.normalize):
+// normalize as the reference computes it, v / sqrt(v . v) (scene_model.geometry.normalize):
 // PoCL's builtin multiplies by rsqrt, which rounds differently a quarter of the time.
 #undef normalize
 #define normalize(v) ((v) / sqrt(dot((v), (v))))

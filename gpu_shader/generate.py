@@ -22,17 +22,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from marchlab.camera import camera_basis
-from marchlab.colormaps import HEAT_COLORS, HEAT_STOPS
-from marchlab.errors import MarchlabError
-from marchlab.scene import DirectionalLight, PointLight, Scene, SpotLight
-from marchlab.shapes import primitives
 from reference_cpu.culling import culled_bounds
 from reference_cpu.normals import STENCILS
 from reference_cpu.relaxation import SLOPE_WEIGHT
+from scene_model.camera import camera_basis
+from scene_model.colormaps import HEAT_COLORS, HEAT_STOPS
+from scene_model.errors import MarchlabError
+from scene_model.scene import DirectionalLight, PointLight, Scene, SpotLight
+from scene_model.shapes import primitives
 
-from .dialects import MAX_FLAT_ROWS, Dialect
-from .dialects import dialect as get_dialect
+from .dialects import MAX_FLAT_ROWS, Dialect, dialect as get_dialect
 from .library import glsl_file
 from .parameters import ParameterBlock
 from .sdf_code import PACKET_TYPES, SCALAR_TYPES, scene_sdf_code
@@ -229,7 +228,7 @@ class _Generator:
                     ("the background", background[0])]
         if mode == "steps":
             return [(f"the path label ({self.file('shading')})", shading_lib.select(["path_step"])),
-                    ("the heat colour map (marchlab/colormaps.py)", self.heat_code())]
+                    ("the heat colour map (scene_model/colormaps.py)", self.heat_code())]
         light_source, light_needs = self.light_code()
         wanted = ["diffuse", SPECULAR[mode]] + background[1]
         wanted += ["toon_band"] * (mode == "toon") + ["checker"] * self.checker + ["path_step"]
@@ -408,9 +407,9 @@ class _Generator:
         return f"{vec3} background({vec3} direction)\n{{\n    return {call};\n}}\n", needs
 
     def heat_code(self) -> str:
-        """``heat`` by linear interpolation between the stops of `marchlab.colormaps`."""
+        """``heat`` by linear interpolation between the stops of `scene_model.colormaps`."""
         lit = self.d.literal
-        lines = ["// The heat ramp of marchlab/colormaps.py: linear between its stops.",
+        lines = ["// The heat ramp of scene_model/colormaps.py: linear between its stops.",
                  "vec3 heat(real x)", "{", "    x = clamp(x, 0.0, 1.0);"]
         for i in range(len(HEAT_STOPS) - 1):
             x0, x1 = HEAT_STOPS[i], HEAT_STOPS[i + 1]

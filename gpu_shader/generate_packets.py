@@ -21,8 +21,8 @@ program's branches (did this ray hit? does it bounce again?) become masks.
 
 from __future__ import annotations
 
-from marchlab.colormaps import HEAT_COLORS, HEAT_STOPS
 from reference_cpu.normals import STENCILS
+from scene_model.colormaps import HEAT_COLORS, HEAT_STOPS
 
 from .generate import _Generator
 
@@ -138,7 +138,7 @@ class PacketGenerator(_Generator):
         """``heat`` over a packet: each lane takes the segment of the ramp its value is in,
         tried from the last segment back to the first."""
         lit = self.d.literal
-        lines = ["// The heat ramp of marchlab/colormaps.py: linear between its stops.",
+        lines = ["// The heat ramp of scene_model/colormaps.py: linear between its stops.",
                  "vec3p heat(packet x)", "{", "    x = clamp(x, 0.0, 1.0);",
                  "    vec3p color;"]
         last = len(HEAT_STOPS) - 2

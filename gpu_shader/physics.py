@@ -1,8 +1,8 @@
 """The physics step on the GPU: physics.World's step as a GLSL compute shader, in float32.
 
-``physics.simulate(world, seconds, backend="gpu")`` steps through a `GpuStepper`: the world's
-state is uploaded once into shader storage buffers (std430), stepped there, and read back into
-the `World` only at the steps a `Trajectory` records. The shader, glsl/physics_step.glsl,
+``marchlab.simulation.simulate(world, seconds, backend="gpu")`` steps through a `GpuStepper`:
+the world's state is uploaded once into shader storage buffers (std430), stepped there, and
+read back into the `World` only at the steps a `Trajectory` records. The shader, glsl/physics_step.glsl,
 runs the CPU step's stages as separate dispatches, with the CPU's function names::
 
     begin_step           integrate_velocities, find_contacts, warm_start

@@ -18,8 +18,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from marchlab.frame import Frame
-from marchlab.scene import Scene
+from scene_model.frame import Frame
+from scene_model.scene import Scene
 
 BANDS = 8              # with a progress callback, a program runs in this many bands of rows
 

@@ -16,9 +16,9 @@ from typing import Callable
 
 import numpy as np
 
-from marchlab.errors import MarchlabError
-from marchlab.frame import Frame
-from marchlab.scene import Scene
+from scene_model.errors import MarchlabError
+from scene_model.frame import Frame
+from scene_model.scene import Scene
 
 from .context import gl_context, renderer_name
 from .dialects import MAX_FLAT_ROWS

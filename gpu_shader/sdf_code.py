@@ -11,12 +11,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from marchlab.errors import MarchlabError
-from marchlab.geometry import rotation_matrix
-from marchlab.shapes import (Box, Capsule, CappedCylinder, Cone, Intersection, Node, Plane,
-                             Repeat, Rotate, RoundBox, Scale, SmoothIntersection,
-                             SmoothSubtraction, SmoothUnion, Sphere, Subtraction, Torus,
-                             Translate, Union)
+from scene_model.errors import MarchlabError
+from scene_model.geometry import rotation_matrix
+from scene_model.shapes import (Box, CappedCylinder, Capsule, Cone, Intersection, Node, Plane,
+                                Repeat, Rotate, RoundBox, Scale, SmoothIntersection,
+                                SmoothSubtraction, SmoothUnion, Sphere, Subtraction, Torus,
+                                Translate, Union)
 
 from .parameters import ParameterBlock
 

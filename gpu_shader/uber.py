@@ -8,7 +8,7 @@ parameter block. The scene becomes tables of rows (the layout is written into th
 ``#define`` lines, see `LAYOUT`)::
 
     header    (private copy P)  camera, settings, mode codes, the normal stencil
-    heat      3 rows a segment  the `steps` colour ramp of marchlab/colormaps.py
+    heat      3 rows a segment  the `steps` colour ramp of scene_model/colormaps.py
     lights    5 rows a light    (position or direction, kind), radiance, attenuation, axis, cone
     objects   16 rows an object (shape, transforms, culling bit), bounding sphere,
                                 two shape rows, then up to 4 transforms of 3 rows each
@@ -27,15 +27,14 @@ import time
 
 import numpy as np
 
-from marchlab.bodies import rendered_scene
-from marchlab.camera import camera_basis
-from marchlab.colormaps import HEAT_COLORS, HEAT_STOPS
-from marchlab.errors import MarchlabError
-from marchlab.scene import DirectionalLight, PointLight, Scene, SpotLight
-from marchlab.shapes import (Box, Capsule, CappedCylinder, Cone, Plane, Rotate, RoundBox, Scale,
-                             Sphere, Torus, Translate)
 from reference_cpu.culling import MAX_CULLED, culled_bounds
 from reference_cpu.normals import STENCILS
+from scene_model.camera import camera_basis
+from scene_model.colormaps import HEAT_COLORS, HEAT_STOPS
+from scene_model.errors import MarchlabError
+from scene_model.scene import DirectionalLight, PointLight, Scene, SpotLight, rendered_scene
+from scene_model.shapes import (Box, CappedCylinder, Capsule, Cone, Plane, Rotate, RoundBox, Scale,
+                                Sphere, Torus, Translate)
 
 from .context import renderer_name
 from .dialects import GLSL, MAX_FLAT_ROWS

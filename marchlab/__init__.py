@@ -1,16 +1,18 @@
 """marchlab: a teaching toolkit for sphere tracing, Phong lighting, shadows and reflections.
 
-The front door: the scene model (plain data), scene files, the camera model, `render` with a
-choice of backend, and the `Frame` it returns. Backends are imported only when used.
+The front door: `render` with a choice of backend, and the scene model's everyday names
+(`Scene`, `load_scene`, `Frame`, ...; they live in `scene_model`). Backends are imported only
+when used; the command line, comparisons, simulation and reports are modules of their own.
 """
 
-from .camera import camera_rays
-from .errors import MarchlabError, SceneError
-from .frame import Frame
+from scene_model.camera import camera_rays
+from scene_model.errors import MarchlabError, SceneError
+from scene_model.frame import Frame
+from scene_model.scene import (Camera, Checker, DirectionalLight, Fog, Material, PointLight,
+                               RenderSettings, Scene, SkyBackground, SolidBackground, SpotLight)
+from scene_model.scenefile import bundled_scene_names, load_scene, save_scene
+
 from .render import BACKENDS, render
-from .scene import (Camera, Checker, DirectionalLight, Fog, Material, PointLight,
-                    RenderSettings, Scene, SkyBackground, SolidBackground, SpotLight)
-from .scenefile import bundled_scene_names, load_scene, save_scene
 
 __version__ = "0.1.0"
 

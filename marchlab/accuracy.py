@@ -32,12 +32,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .accuracy_truth import (TRUTH_RESOLUTION, SceneTruth, angle_deg, p99, scene_truth,
-                             statistic, truth_method, within_truth)
-from .bodies import rendered_scene
-from .compare import dilate, boundary
+from scene_model.scene import Scene, rendered_scene
+
+from .accuracy_truth import (TRUTH_RESOLUTION, SceneTruth, angle_deg, p99, scene_truth, statistic,
+                             truth_method, within_truth)
+from .compare import boundary, dilate
 from .render import backend_problem, render
-from .scene import Scene
 
 # What "accurate enough" means for a recommendation: surface distance within epsilon at the
 # default epsilon, no misclassified pixel off the silhouette band, normals within half a degree.
@@ -65,9 +65,9 @@ OTHER = {
 def analytic_scenes() -> dict[str, Scene]:
     """Scenes the analytic truth can trace exactly: the bundled classroom, and rotated boxes
     and spheres on a floor seen from low down (grazing floor rays, box edges and corners)."""
-    from .builder import (Camera, Checker, Material, PointLight, RenderSettings, box, plane,
-                          sphere)
-    from .scenefile import load_scene
+    from scene_model.builder import (Camera, Checker, Material, PointLight, RenderSettings, box,
+                                     plane, sphere)
+    from scene_model.scenefile import load_scene
     boxes = Scene(
         description="rotated boxes and spheres on a checker floor, seen from low down",
         camera=Camera(position=(0.0, 0.9, 6.0), look_at=(0.0, 0.5, 0.0), fov=55.0),
@@ -85,7 +85,7 @@ def analytic_scenes() -> dict[str, Scene]:
 def sweep_scenes() -> dict[str, Scene]:
     """`analytic_scenes`, then every bundled scene the analytic truth cannot trace (those
     are measured against the Embree truth, `truth_method`)."""
-    from .scenefile import bundled_scene_names, load_scene
+    from scene_model.scenefile import bundled_scene_names, load_scene
     scenes = analytic_scenes()
     for name in bundled_scene_names():
         scene = load_scene(name)
@@ -185,7 +185,7 @@ def measure(name, scene, reference: SceneTruth, gold, backend, precision, settin
         The frame's hit mask (a baseline for `Row.hit_changed`).
     """
     from reference_cpu.truth import surface_distances
-    from .camera import camera_rays
+    from scene_model.camera import camera_rays
     width, height = size
     truth = reference.truth
     seconds, frame = timed_render(configured(scene, change), width, height, backend, precision,
@@ -316,59 +316,3 @@ def embree_problem() -> str | None:
     if find_spec("embreex") is None or find_spec("skimage") is None:
         return "the Embree truth needs embreex and scikit-image: pip install 'marchlab[embree]'"
     return None
-
-
-def run(markdown="docs/speed-vs-error.md", image_dir="docs/images", size=(160, 120), repeat=3,
-        command="marchlab bench accuracy", quick=False, echo=print) -> list:
-    """The whole report: build each scene's truth, sweep, compare the uber shader if the gpu
-    backend runs, write."""
-    from .accuracy_report import format_number, write_report
-    scenes = sweep_scenes()
-    grid = settings_grid()
-    resolution = TRUTH_RESOLUTION
-    if quick:                       # a smoke run: two settings, one scene of each truth
-        scenes = {k: scenes[k] for k in ("classroom", "csg")}
-        grid = {k: grid[k] for k in ("plain, eps 0.001", "auto, eps 0.001")}
-        resolution = 32
-    problem = embree_problem()
-    skipped = {} if problem is None else {k: problem for k, s in scenes.items()
-                                           if truth_method(s) == "embree"}
-    if skipped:
-        scenes = {k: s for k, s in scenes.items() if k not in skipped}
-        echo(f"left out {', '.join(skipped)}: {problem}")
-    truths: dict[str, SceneTruth] = {}
-    for name, scene in scenes.items():
-        truths[name] = scene_truth(scene, *size, resolution=resolution)
-        own = truths[name].errors()
-        echo(f"truth of {name}: {truths[name].label()} in {truths[name].seconds:.1f} s, its own "
-             f"|Δt| p99 {format_number(own['depth_p99'])}, normal p99 "
-             f"{format_number(own['normal_p99_deg'])}°")
-    pairs = backends_present()
-    total = len(scenes) * len(grid) * len(pairs)
-    done = []
-
-    def progress(row):
-        done.append(row)
-        echo(f"[{len(done)}/{total}] {row.scene} {row.backend} {row.precision} {row.setting}: "
-             f"{row.ms:.1f} ms, {row.steps_mean:.1f} steps, surface p99 "
-             f"{format_number(row.surface_p99)}")
-
-    rows = sweep(scenes, size, repeat, grid, pairs, progress, truths, resolution)
-    uber, devices = None, {"numpy": "NumPy on the CPU"}
-    if any(b == "opencl" for b, _ in pairs):
-        from reference_cpu.opencl import device_name
-        devices["opencl"] = f"OpenCL device {device_name()}"
-    if any(b == "gpu" for b, _ in pairs):
-        from gpu_shader.render import device_name
-        devices["gpu"] = f"OpenGL renderer {device_name()}"
-        from gpu_shader.uber import compare_specialised_uber
-        uber = []
-        for name, scene in scenes.items():
-            try:
-                result = compare_specialised_uber(scene, *size, repeat=max(3, repeat))
-            except Exception as err:        # noqa: BLE001 - a scene the uber shader lacks
-                echo(f"uber shader: {name}: {err}")
-                continue
-            uber.append({"scene": name, **result})
-    return write_report(rows, markdown, image_dir, command, size, repeat, uber, devices,
-                        truths, skipped)

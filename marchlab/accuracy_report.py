@@ -2,7 +2,7 @@
 
 Turns the rows of a sweep (`marchlab.accuracy`) and the truths they were measured against
 (`marchlab.accuracy_truth`) into the Markdown page that ``marchlab bench accuracy`` writes,
-with one time-against-error plot per scene in `PLOTTED`.
+with one time-against-error plot per scene in `PLOTTED`; `run` does the whole command.
 """
 
 from __future__ import annotations
@@ -11,8 +11,9 @@ import math
 
 import numpy as np
 
-from .accuracy import TOLERANCES, Row, numpy_rows, pareto, recommend
-from .accuracy_truth import TRUTH_RESOLUTION, SceneTruth, p99, statistic
+from .accuracy import (TOLERANCES, Row, backends_present, embree_problem, numpy_rows, pareto,
+                       recommend, settings_grid, sweep, sweep_scenes)
+from .accuracy_truth import TRUTH_RESOLUTION, SceneTruth, p99, scene_truth, statistic, truth_method
 
 # The scenes whose time-against-error plot the report shows (docs/images is committed).
 PLOTTED = ("classroom", "boxes", "csg")
@@ -229,7 +230,7 @@ def write_report(rows: list[Row], markdown, image_dir, command: str, size, repea
     atomically, so an interrupted run leaves the previous report whole.
     """
     from pathlib import Path
-    from .files import write_atomically
+    from scene_model.files import write_atomically
     markdown, image_dir = Path(markdown), Path(image_dir)
     truths = truths or {}
     scenes = list(dict.fromkeys(r.scene for r in rows))
@@ -242,7 +243,7 @@ def write_report(rows: list[Row], markdown, image_dir, command: str, size, repea
            "runs on this shared machine).", "", "```sh", command, "```", "",
            f"Image size {size[0]}x{size[1]}, median of {repeat} timed frames after one "
            "untimed (compiling) frame. Scenes, with the truth each is measured against "
-           "(`reference_cpu/truth.py`): "
+           "(`reference_cpu/truth/ground_truth.py`): "
            + ", ".join(f"`{s}` ({method[s]})" for s in scenes) + "."]
     if skipped:
         out += ["", "Left out: " + "; ".join(f"`{s}` ({why})" for s, why in skipped.items())
@@ -307,3 +308,58 @@ def write_report(rows: list[Row], markdown, image_dir, command: str, size, repea
     write_atomically(markdown, ("\n".join(out) + "\n").encode())
     written.append(markdown)
     return written
+
+
+def run(markdown="docs/speed-vs-error.md", image_dir="docs/images", size=(160, 120), repeat=3,
+        command="marchlab bench accuracy", quick=False, echo=print) -> list:
+    """The whole report: build each scene's truth, sweep, compare the uber shader if the gpu
+    backend runs, write."""
+    scenes = sweep_scenes()
+    grid = settings_grid()
+    resolution = TRUTH_RESOLUTION
+    if quick:                       # a smoke run: two settings, one scene of each truth
+        scenes = {k: scenes[k] for k in ("classroom", "csg")}
+        grid = {k: grid[k] for k in ("plain, eps 0.001", "auto, eps 0.001")}
+        resolution = 32
+    problem = embree_problem()
+    skipped = {} if problem is None else {k: problem for k, s in scenes.items()
+                                           if truth_method(s) == "embree"}
+    if skipped:
+        scenes = {k: s for k, s in scenes.items() if k not in skipped}
+        echo(f"left out {', '.join(skipped)}: {problem}")
+    truths: dict[str, SceneTruth] = {}
+    for name, scene in scenes.items():
+        truths[name] = scene_truth(scene, *size, resolution=resolution)
+        own = truths[name].errors()
+        echo(f"truth of {name}: {truths[name].label()} in {truths[name].seconds:.1f} s, its own "
+             f"|Δt| p99 {format_number(own['depth_p99'])}, normal p99 "
+             f"{format_number(own['normal_p99_deg'])}°")
+    pairs = backends_present()
+    total = len(scenes) * len(grid) * len(pairs)
+    done = []
+
+    def progress(row):
+        done.append(row)
+        echo(f"[{len(done)}/{total}] {row.scene} {row.backend} {row.precision} {row.setting}: "
+             f"{row.ms:.1f} ms, {row.steps_mean:.1f} steps, surface p99 "
+             f"{format_number(row.surface_p99)}")
+
+    rows = sweep(scenes, size, repeat, grid, pairs, progress, truths, resolution)
+    uber, devices = None, {"numpy": "NumPy on the CPU"}
+    if any(b == "opencl" for b, _ in pairs):
+        from gpu_shader.opencl import device_name
+        devices["opencl"] = f"OpenCL device {device_name()}"
+    if any(b == "gpu" for b, _ in pairs):
+        from gpu_shader.render import device_name
+        devices["gpu"] = f"OpenGL renderer {device_name()}"
+        from gpu_shader.uber import compare_specialised_uber
+        uber = []
+        for name, scene in scenes.items():
+            try:
+                result = compare_specialised_uber(scene, *size, repeat=max(3, repeat))
+            except Exception as err:        # noqa: BLE001 - a scene the uber shader lacks
+                echo(f"uber shader: {name}: {err}")
+                continue
+            uber.append({"scene": name, **result})
+    return write_report(rows, markdown, image_dir, command, size, repeat, uber, devices,
+                        truths, skipped)

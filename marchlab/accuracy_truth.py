@@ -21,13 +21,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .bodies import rendered_scene
-from .bounds import bounding_sphere
+from scene_model.bounds import bounding_sphere
+from scene_model.errors import MarchlabError
+from scene_model.geometry import angle_between, dot, rotation_matrix
+from scene_model.scene import Scene, rendered_scene
+from scene_model.shapes import Repeat, Rotate, Scale, Translate, Union
+
 from .compare import boundary, dilate
-from .errors import MarchlabError
-from .geometry import angle_between, dot, rotation_matrix
-from .scene import Scene
-from .shapes import Repeat, Rotate, Scale, Translate, Union
 
 if TYPE_CHECKING:
     from reference_cpu.truth import Truth
@@ -48,9 +48,9 @@ MAX_COPIES = 10_000
 
 def truth_method(scene: Scene) -> str:
     """``"analytic"`` where every part of the scene is a sphere, box or plane (what
-    `reference_cpu.truth_analytic` intersects exactly), else ``"embree"``."""
-    from reference_cpu.truth_analytic import ANALYTIC_KINDS
-    from reference_cpu.truth_parts import scene_parts
+    `reference_cpu.truth.analytic` intersects exactly), else ``"embree"``."""
+    from reference_cpu.truth.analytic import ANALYTIC_KINDS
+    from reference_cpu.truth.parts import scene_parts
     parts = scene_parts(rendered_scene(scene).objects)
     return "analytic" if all(isinstance(p.leaf, ANALYTIC_KINDS) for p in parts) else "embree"
 
@@ -61,7 +61,7 @@ def written_out(node, eye, reach: float):
     A repeat folds space into cells and evaluates its child in the nearest one (Quilez,
     "Domain repetition", https://iquilezles.org/articles/sdfrepetition/); when the child lies
     inside its cell, the union of its translated copies has the same surface, inside and
-    outside. Written out, each copy is a part of its own (`reference_cpu.truth_parts`): a
+    outside. Written out, each copy is a part of its own (`reference_cpu.truth.parts`): a
     sphere becomes an icosphere rather than a piece of one marching-cubes grid over the whole
     row. An infinite repeat keeps the copies within ``reach`` of ``eye``: the truth ignores
     surfaces beyond ``render.max_distance`` anyway.
@@ -249,7 +249,7 @@ def scene_truth(scene: Scene, width: int, height: int, resolution: int = TRUTH_R
     (see `SceneTruth`)."""
     from reference_cpu.scene_sdf import build_scene_sdf
     from reference_cpu.truth import ground_truth, surface_distances
-    from .camera import camera_rays
+    from scene_model.camera import camera_rays
     start = time.perf_counter()
     method = truth_method(scene) if method is None else method
     truth = ground_truth(truth_scene(scene), width, height, method=method, resolution=resolution)

@@ -1,6 +1,6 @@
 """Frames to an animation file: an animated GIF with Pillow, or an MP4 if imageio can write one.
 
-Both writers leave a file whole or not at all (`marchlab.files.write_atomically`).
+Both writers leave a file whole or not at all (`scene_model.files.write_atomically`).
 """
 
 from __future__ import annotations
@@ -14,8 +14,8 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
-from .errors import MarchlabError
-from .files import write_atomically
+from scene_model.errors import MarchlabError
+from scene_model.files import write_atomically
 
 FORMATS = (".gif", ".mp4")
 

@@ -17,12 +17,14 @@ import time
 from contextlib import contextmanager
 from pathlib import Path
 
-from .bodies import rendered_scene, scene_at
-from .errors import MarchlabError, SceneError
-from .files import write_atomically
-from .frame import AOVS
-from .render import BACKENDS, MAX_SIDE, PRECISIONS, backend_problem, render
-from .scenefile import bundled_scene_names, load_scene, scene_to_toml
+from scene_model.camera import MAX_SIDE
+from scene_model.errors import MarchlabError, SceneError
+from scene_model.files import write_atomically
+from scene_model.frame import AOVS
+from scene_model.scene import rendered_scene, scene_at
+from scene_model.scenefile import bundled_scene_names, load_scene, scene_to_toml
+
+from .render import BACKENDS, PRECISIONS, backend_problem, render
 
 OUTPUT_SUFFIXES = (".png", ".npz")
 DASHED_VALUE_OPTIONS = ("--size", "--seconds", "--fps", "--resolution")
@@ -400,7 +402,7 @@ def cmd_truth(args) -> int:
 
 
 def cmd_bench_accuracy(args) -> int:
-    from .accuracy import run
+    from .accuracy_report import run
     output = Path(args.output)
     if output.suffix.lower() != ".md":
         raise MarchlabError(f"{output}: the report is Markdown (use a .md file)")

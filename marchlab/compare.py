@@ -27,9 +27,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .files import write_atomically
-from .frame import Frame
-from .geometry import angle_between
+from scene_model.files import write_atomically
+from scene_model.frame import Frame
+from scene_model.geometry import angle_between
 
 
 @dataclass

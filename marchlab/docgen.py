@@ -13,10 +13,11 @@ import sys
 import typing
 from pathlib import Path
 
-from .bodies import Body, PhysicsSettings
-from .fields import field_types, show
-from .scene import (Background, Camera, Checker, Fog, Light, Material, RenderSettings, Scene)
-from .shapes import node_kinds
+from scene_model.bodies import Body, PhysicsSettings
+from scene_model.fields import field_types, show
+from scene_model.scene import (Background, Camera, Checker, Fog, Light, Material, RenderSettings,
+                               Scene)
+from scene_model.shapes import node_kinds
 
 BEGIN = "<!-- BEGIN GENERATED FIELD REFERENCE (python -m marchlab.docgen) -->"
 END = "<!-- END GENERATED FIELD REFERENCE -->"

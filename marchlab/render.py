@@ -11,10 +11,10 @@ import importlib
 from dataclasses import dataclass
 from typing import Callable
 
-from .bodies import rendered_scene
-from .errors import MarchlabError
-from .frame import Frame
-from .scene import Scene
+from scene_model.camera import check_image_size
+from scene_model.errors import MarchlabError
+from scene_model.frame import Frame
+from scene_model.scene import Scene, rendered_scene
 
 
 @dataclass(frozen=True)
@@ -34,12 +34,11 @@ BACKENDS = {
                      "the NumPy reference sphere tracer (CPU)"),
     "gpu": Backend("gpu_shader.render", ("float32",),
                    "the generated fragment shader, through moderngl and EGL"),
-    "opencl": Backend("reference_cpu.opencl", ("float32", "float64"),
+    "opencl": Backend("gpu_shader.opencl", ("float32", "float64"),
                       "the same generated code as an OpenCL kernel, on a CPU device (PoCL)"),
 }
 
 PRECISIONS = ("float32", "float64")
-MAX_SIDE = 16384      # the usual largest GPU texture; far beyond what a lesson needs
 
 
 def render(scene: Scene, width: int, height: int, backend: str = "numpy",
@@ -51,7 +50,7 @@ def render(scene: Scene, width: int, height: int, backend: str = "numpy",
     ----------
     scene : Scene
         From `marchlab.load_scene` or built in Python. Its bodies are drawn as spheres at
-        their positions (`marchlab.bodies.scene_objects`).
+        their positions (`scene_model.scene.scene_objects`).
     width, height : int
         Image size in pixels.
     backend : str
@@ -70,9 +69,7 @@ def render(scene: Scene, width: int, height: int, backend: str = "numpy",
         raise MarchlabError(f"the {backend} backend renders in "
                             f"{' or '.join(BACKENDS[backend].precisions)} only "
                             f"(asked for {precision})")
-    for name, value in (("width", width), ("height", height)):
-        if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= MAX_SIDE:
-            raise MarchlabError(f"{name} must be an integer from 1 to {MAX_SIDE} (got {value!r})")
+    check_image_size(width, height)
     if not isinstance(scene, Scene):
         raise MarchlabError(f"scene must be a marchlab.Scene (got {type(scene).__name__}); "
                             "use marchlab.load_scene(name_or_path)")

@@ -1,7 +1,7 @@
 """From a scene to a physics world and back: the bodies stepped, then drawn frame by frame.
 
 `build_world` reads the scene's ``[physics]`` settings, its ``[[bodies]]`` and its floor and
-walls into a `physics.World`; `physics.simulate` steps it; `marchlab.bodies.scene_at` puts the
+walls into a `physics.World`; `physics.simulate` steps it; `scene_model.scene.scene_at` puts the
 recorded centres back into the scene for a renderer. `frame_plan` decides which steps become
 frames: the time step stays fixed, the frame rate only chooses how often to look.
 
@@ -18,13 +18,42 @@ from dataclasses import dataclass
 
 import numpy as np
 
-import physics
 from physics import PhysicsError
+import physics
+from physics.errors import choice
+from scene_model.bodies import PhysicsSettings
+from scene_model.errors import MarchlabError, SceneError
+from scene_model.scene import Scene
+from scene_model.shapes import Plane, Translate
 
-from .bodies import PhysicsSettings
-from .errors import MarchlabError, SceneError
-from .scene import Scene
-from .shapes import Plane, Translate
+
+def _cpu_stepper(world: physics.World):
+    return world.step
+
+
+def _gpu_stepper(world: physics.World):
+    from gpu_shader.physics import GpuStepper       # imported on use: it needs moderngl
+    return GpuStepper(world)
+
+
+# The implementations of the physics step, by name: the CPU ground truth and the GPU compute
+# shader checked against it. Each is a function of the world returning ``step(n)``, which
+# advances the world n steps and leaves its state readable (the GPU reads it back only then).
+STEPPERS = {"cpu": _cpu_stepper, "gpu": _gpu_stepper}
+
+
+def simulate(world: physics.World, seconds: float, record_every: int = 1,
+             backend: str = "cpu") -> physics.Trajectory:
+    """`physics.simulate` with the step of ``backend``: "cpu" (`physics.World.step`) or "gpu"
+    (`gpu_shader.physics.GpuStepper`: float32 worlds with the simultaneous solver only).
+
+    Raises
+    ------
+    PhysicsError
+        An unknown backend, or a world the backend cannot step.
+    """
+    step = STEPPERS[choice(backend, "backend", list(STEPPERS))](world)
+    return physics.simulate(world, seconds, record_every=record_every, step=step)
 
 
 def physics_settings(scene: Scene) -> PhysicsSettings:

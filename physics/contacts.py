@@ -21,8 +21,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from marchlab.geometry import dot
 from physics.broadphase import find_pairs
+from scene_model.geometry import dot
 
 FALLBACK_NORMAL = (0.0, 1.0, 0.0)
 

@@ -28,10 +28,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from marchlab.geometry import dot
 from physics.broadphase import find_pairs
 from physics.contacts import sphere_plane_gaps
 from physics.impulses import collision_impulse, cross, effective_masses
+from scene_model.geometry import dot
 
 
 def first_plane_hit(gap, speed, acceleration, duration):

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from marchlab.geometry import dot
+from scene_model.geometry import dot
 
 
 @dataclass

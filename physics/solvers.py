@@ -49,10 +49,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from marchlab.geometry import dot
-
 from physics.impulses import (SolverBodies, apply_impulse, collision_impulse, contact_impulse,
                               effective_masses, relative_velocity)
+from scene_model.geometry import dot
 
 SETTLED = 1e-9   # m/s: resting passes stop once none changes a velocity by more than this
 

@@ -11,21 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from physics.errors import choice, in_range, whole_number
-
-
-def _cpu_stepper(world):
-    return world.step
-
-
-def _gpu_stepper(world):
-    from gpu_shader.physics import GpuStepper       # imported on use: it needs moderngl
-    return GpuStepper(world)
-
-
-# backend name -> a function of the world returning step(n), which advances the world n steps
-# and leaves its state readable (the GPU stepper reads it back only then).
-BACKENDS = {"cpu": _cpu_stepper, "gpu": _gpu_stepper}
+from physics.errors import in_range, whole_number
 
 
 @dataclass
@@ -77,7 +63,7 @@ class Trajectory:
                                      int(self.active[t, body])])
 
 
-def simulate(world, seconds, record_every: int = 1, backend: str = "cpu") -> Trajectory:
+def simulate(world, seconds, record_every: int = 1, step=None) -> Trajectory:
     """Step ``world`` (in place) for ``seconds`` and record it.
 
     Parameters
@@ -88,9 +74,11 @@ def simulate(world, seconds, record_every: int = 1, backend: str = "cpu") -> Tra
     record_every : int
         Record the state every this many steps; the state before the first step is always
         recorded, and so is the last.
-    backend : {"cpu", "gpu"}
-        Which implementation steps the world: "gpu" is gpu_shader.physics, float32 worlds with
-        the simultaneous solver only.
+    step : callable, optional
+        ``step(n)`` advances the world n steps and leaves its state readable; default
+        ``world.step``. Another implementation of the same step plugs in here (the GPU
+        step, `gpu_shader.physics.GpuStepper`; `marchlab.simulation.simulate` picks one by
+        name).
 
     Returns
     -------
@@ -98,8 +86,7 @@ def simulate(world, seconds, record_every: int = 1, backend: str = "cpu") -> Tra
     """
     seconds = in_range(seconds, "seconds", 0)
     record_every = whole_number(record_every, "record_every", 1)
-    choice(backend, "backend", list(BACKENDS))
-    step = BACKENDS[backend](world)
+    step = world.step if step is None else step
     total = int(round(seconds / world.dt))
     first_event = len(world.events)
     records = [_snapshot(world)]

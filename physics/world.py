@@ -12,17 +12,16 @@ import copy
 
 import numpy as np
 
-from marchlab.geometry import dot
-
-from physics.continuous import bounce_off_planes, stop_sphere_sweeps
 from physics.contacts import find_contacts, spread_coincident
-from physics.errors import (PhysicsError, bounds_box, choice, column, finite, float_dtype,
-                            in_range, positive, rows, vector3, whole_number)
+from physics.continuous import bounce_off_planes, stop_sphere_sweeps
+from physics.errors import (PhysicsError, bounds_box, choice, column, finite, float_dtype, in_range,
+                            positive, rows, vector3, whole_number)
 from physics.events import EVENT_DTYPE, make_events
 from physics.impulses import SolverBodies
 from physics.integrators import INTEGRATORS, integrate_velocities, parabola_start_velocity
 from physics.quaternions import rotate_orientations
 from physics.solvers import SOLVERS, contact_keys, separate_overlaps, warm_start
+from scene_model.geometry import dot
 
 SPAWN_OFFSET = 1e-3     # a sphere spawned on another's centre is moved this many radii away
 

@@ -7,7 +7,7 @@ is still a bound on how far the ray may go before it meets any of them, and the 
 none of the others. Left out, a far object no longer holds a passing ray back, so rays that
 pass close to an object without touching it take fewer steps.
 
-The spheres come from `marchlab.bounds.object_bounds`, widened by 2 epsilon: a ray that passes
+The spheres come from `scene_model.bounds.object_bounds`, widened by 2 epsilon: a ray that passes
 outside one stays farther than epsilon from the object, where the plain march would not have
 stopped either. Unbounded objects (planes, infinite repetition) are always in. The GLSL and
 OpenCL twin is ``glsl/culling.glsl``.
@@ -19,8 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from marchlab.bounds import object_bounds
-from marchlab.geometry import dot
+from scene_model.bounds import object_bounds
+from scene_model.geometry import dot
 
 MAX_CULLED = 32     # objects with a sphere, at most: the shader keeps one bit per object
 
@@ -63,7 +63,7 @@ class BoundingSpheres:
 
 
 def culled_bounds(objects, epsilon: float) -> list[tuple[int, np.ndarray, float]]:
-    """The spheres every backend culls with: `marchlab.bounds.object_bounds` widened by
+    """The spheres every backend culls with: `scene_model.bounds.object_bounds` widened by
     2 epsilon, the first `MAX_CULLED` of them."""
     return object_bounds(objects, 2 * epsilon)[:MAX_CULLED]
 

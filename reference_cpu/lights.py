@@ -11,8 +11,8 @@ import math
 
 import numpy as np
 
-from marchlab.geometry import dot
-from marchlab.scene import DirectionalLight, PointLight, SpotLight
+from scene_model.geometry import dot
+from scene_model.scene import DirectionalLight, PointLight, SpotLight
 
 from .sdf import length
 

@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from marchlab.geometry import dot
+from scene_model.geometry import dot
 
 from .march import columns
 

@@ -15,10 +15,10 @@ from typing import Callable
 
 import numpy as np
 
-from marchlab.camera import camera_rays
-from marchlab.frame import Frame
-from marchlab.scene import Checker, Scene
-from marchlab.shapes import primitives
+from scene_model.camera import camera_rays
+from scene_model.frame import Frame
+from scene_model.scene import Checker, Scene
+from scene_model.shapes import primitives
 
 from . import shading
 from .culling import BoundingSpheres
@@ -128,7 +128,7 @@ class Tracer:
     def lit_color(self, origin, directions, t, hit, normal, object_id):
         """Shaded colour with fog and mirror bounces (source 000's iterative reflection loop).
 
-        Also returns each pixel's path label (see `marchlab.frame.Frame.path`): at every
+        Also returns each pixel's path label (see `scene_model.frame.Frame.path`): at every
         bounce it takes in the object id hit (-1 for the background), the checker cell's
         parity and which lights are hard-shadowed, so that it changes exactly where the
         colour may jump.

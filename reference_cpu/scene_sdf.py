@@ -3,7 +3,7 @@
 `build_scene_sdf` walks the tree once and returns a function ``sdf(p)`` that evaluates it over
 points ``p : (N, 3)``. Parameters are converted to the render's dtype up front, as a shader
 receives them as uniforms. Each primitive's object id is its depth-first index
-(`marchlab.shapes.primitives`); at any point the id is that of the primitive whose distance the
+(`scene_model.shapes.primitives`); at any point the id is that of the primitive whose distance the
 operators chose (the nearer one for a union, the farther one for an intersection).
 """
 
@@ -13,11 +13,11 @@ from typing import Callable
 
 import numpy as np
 
-from marchlab.geometry import rotation_matrix
-from marchlab.shapes import (Box, Capsule, CappedCylinder, Cone, Intersection, Node, Plane,
-                             Repeat, Rotate, RoundBox, Scale, SmoothIntersection,
-                             SmoothSubtraction, SmoothUnion, Sphere, Subtraction, Torus,
-                             Translate, Union)
+from scene_model.geometry import rotation_matrix
+from scene_model.shapes import (Box, CappedCylinder, Capsule, Cone, Intersection, Node, Plane,
+                                Repeat, Rotate, RoundBox, Scale, SmoothIntersection,
+                                SmoothSubtraction, SmoothUnion, Sphere, Subtraction, Torus,
+                                Translate, Union)
 
 from . import sdf as S
 from .march import columns

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from marchlab.geometry import dot
+from scene_model.geometry import dot
 
 
 def length(v: np.ndarray) -> np.ndarray:

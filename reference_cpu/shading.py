@@ -18,8 +18,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from marchlab.colormaps import heat
-from marchlab.geometry import dot, normalize
+from scene_model.colormaps import heat
+from scene_model.geometry import dot, normalize
 
 
 

@@ -6,11 +6,9 @@ import dataclasses
 
 import numpy as np
 import pytest
-
 from cli_helpers import run_cli
-from marchlab import accuracy as A
-from marchlab import accuracy_report as R
-from marchlab import accuracy_truth as T
+
+from marchlab import accuracy as A, accuracy_report as R, accuracy_truth as T
 
 
 def row(setting, ms, surface, off_band=0, normal=0.1, backend="numpy", precision="float64",
@@ -116,8 +114,8 @@ def test_written_out_repeats_have_the_repeats_surface():
 
 
 def test_a_repeated_shape_reaching_out_of_its_cell_is_refused_in_one_line():
-    from marchlab.builder import Scene, sphere
-    from marchlab.errors import MarchlabError
+    from scene_model.builder import Scene, sphere
+    from scene_model.errors import MarchlabError
     scene = Scene(objects=(sphere(0.8).repeat((1.0, 0.0, 0.0), (2, 0, 0)),))
     with pytest.raises(MarchlabError, match="reaches out of its cell") as err:
         T.truth_scene(scene)
@@ -156,7 +154,7 @@ def test_a_render_finer_than_its_truth_has_its_errors_marked():
     # about 0.02): every hit lies within the truth's own depth error of the truth's hit, so
     # the truth cannot tell its error from 0 and marks it; the exact truth marks nothing,
     # and finds the render over 100 times closer than the coarse truth's own p99 error.
-    from marchlab.builder import Camera, RenderSettings, Scene, sphere
+    from scene_model.builder import Camera, RenderSettings, Scene, sphere
     scene = Scene(camera=Camera(position=(0, 0, 3), look_at=(0, 0, 0), fov=40),
                   render=RenderSettings(epsilon=1e-6, max_steps=1000), objects=(sphere(1.0),))
     size = (32, 24)
@@ -178,7 +176,7 @@ def test_pixels_the_truths_silhouette_may_have_moved_are_excused_and_marked():
     # about 3 pixels inside the sphere's at 128x96, so some pixels the render hits lie
     # beyond the 1-pixel band; the band widened by the stated bound in pixels takes them
     # in, and the count is marked as excused only by that widening.
-    from marchlab.builder import Camera, RenderSettings, Scene, sphere
+    from scene_model.builder import Camera, RenderSettings, Scene, sphere
     scene = Scene(camera=Camera(position=(0, 0, 3), look_at=(0, 0, 0), fov=40),
                   render=RenderSettings(epsilon=1e-6, max_steps=1000), objects=(sphere(1.0),))
     size = (128, 96)

@@ -1,4 +1,4 @@
-"""Building scenes in Python (marchlab/builder.py and the operators of marchlab/shapes.py).
+"""Building scenes in Python (scene_model/builder.py and the operators of scene_model/shapes.py).
 
 The builder must give the very same dataclasses a scene file gives: ``sphere(1).at(0, 1, 0)``
 is ``Translate(Sphere(1.0), (0.0, 1.0, 0.0))``, values are normalised (ints to floats, lists to
@@ -13,14 +13,15 @@ import math
 import numpy as np
 import pytest
 
-import marchlab
 from marchlab import SceneError, load_scene
-from marchlab import builder
-from marchlab.builder import (Camera, Checker, Material, PointLight, Scene, SpotLight, box,
-                              capsule, cone, intersection, plane, round_box, sphere, torus,
-                              union)
-from marchlab.shapes import (Intersection, Repeat, Rotate, Scale, SmoothIntersection,
-                             SmoothSubtraction, SmoothUnion, Sphere, Subtraction, Translate, Union)
+import marchlab
+from scene_model import builder
+from scene_model.builder import (Camera, Checker, Material, PointLight, Scene, SpotLight, box,
+                                 capsule, cone, intersection, plane, round_box, sphere, torus,
+                                 union)
+from scene_model.shapes import (Intersection, Repeat, Rotate, Scale, SmoothIntersection,
+                                SmoothSubtraction, SmoothUnion, Sphere, Subtraction, Translate,
+                                Union)
 
 
 # --- Shapes and operators ----------------------------------------------------------------------

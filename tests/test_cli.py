@@ -14,12 +14,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 from PIL import Image
-
-import marchlab
-from marchlab import Frame, load_scene
-from marchlab.files import write_atomically
-
 from cli_helpers import assert_one_line_error, leftovers, run_cli, run_marchlab
+
+from marchlab import Frame, load_scene
+import marchlab
+from scene_model.files import write_atomically
+from scene_model.scenefile import scene_path
 
 WIDTH, HEIGHT = 32, 24
 SIZE = f"{WIDTH}x{HEIGHT}"
@@ -280,7 +280,7 @@ def test_bad_set_exits_2_naming_scene_field_and_problem(assignment, field, probl
                            "--set", assignment)
     assert_one_line_error(code, err)
     source, _, rest = err.removeprefix("marchlab: error: ").partition(": ")
-    assert source in ("classroom", str(marchlab.scenefile.scene_path("classroom")))
+    assert source in ("classroom", str(scene_path("classroom")))
     assert rest.startswith(f"{field}: ") and problem in rest
     assert not out.exists()
 
@@ -376,7 +376,7 @@ def test_write_atomically_removes_its_temp_file_when_the_payload_write_fails(tmp
     target = tmp_path / "image.png"
     target.write_bytes(b"old")
     real_fdopen = os.fdopen
-    monkeypatch.setattr("marchlab.files.os.fdopen",
+    monkeypatch.setattr("scene_model.files.os.fdopen",
                         lambda fd, *args, **kw: FailingFile(real_fdopen(fd, *args, **kw)))
     with pytest.raises(OSError):
         write_atomically(target, b"new contents" * 100)
@@ -398,7 +398,7 @@ def test_write_atomically_renames_a_complete_temp_file_over_the_target(tmp_path,
                     temp_then=Path(src).read_bytes())
         real_replace(src, dst)
 
-    monkeypatch.setattr("marchlab.files.os.replace", spying_replace)
+    monkeypatch.setattr("scene_model.files.os.replace", spying_replace)
     write_atomically(target, payload)
     assert seen["dst"] == target and seen["src"].parent == tmp_path
     assert seen["src"].name.startswith(".image.png.") and seen["src"].name.endswith(".tmp")

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 import marchlab
-from marchlab.builder import Camera, RenderSettings, Scene, SolidBackground, sphere
 from marchlab.compare import boundary, compare_frames, dilate
+from scene_model.builder import Camera, RenderSettings, Scene, SolidBackground, sphere
 
 SCENE = Scene(camera=Camera(position=(0.0, 0.0, 4.0), fov=40.0),
               render=RenderSettings(background=SolidBackground((0.2, 0.3, 0.4))),

@@ -1,4 +1,4 @@
-"""Bounding-sphere culling (marchlab.bounds, reference_cpu.culling) against analytic answers.
+"""Bounding-sphere culling (scene_model.bounds, reference_cpu.culling) against analytic answers.
 
 Culling is safe when three things hold, each tested here:
 
@@ -23,22 +23,21 @@ total culling still saves 18% and 25% of the evaluations, and 13% without relaxa
 
 from __future__ import annotations
 
-
 import numpy as np
 import pytest
 from hypothesis import assume, given
 from hypothesis import strategies as st
+from test_march import ray_sphere, unit
 
 from gpu_shader.generate import generate
-from marchlab.bounds import bounding_sphere, enclosing_sphere, object_bounds
-from marchlab.builder import RenderSettings, Scene, plane, sphere
-from marchlab.shapes import (Box, Capsule, CappedCylinder, Cone, Intersection, Plane, Repeat,
-                             Rotate, RoundBox, Scale, SmoothIntersection, SmoothSubtraction,
-                             SmoothUnion, Sphere, Subtraction, Torus, Translate, Union)
 from reference_cpu.culling import MAX_CULLED, BoundingSpheres, ray_meets_sphere
 from reference_cpu.march import march
 from reference_cpu.scene_sdf import build_scene_sdf
-from test_march import ray_sphere, unit
+from scene_model.bounds import bounding_sphere, enclosing_sphere, object_bounds
+from scene_model.builder import RenderSettings, Scene, plane, sphere
+from scene_model.shapes import (Box, CappedCylinder, Capsule, Cone, Intersection, Plane, Repeat,
+                                Rotate, RoundBox, Scale, SmoothIntersection, SmoothSubtraction,
+                                SmoothUnion, Sphere, Subtraction, Torus, Translate, Union)
 
 EPSILON = 1e-3
 

@@ -3,8 +3,9 @@
 import re
 from pathlib import Path
 
-from marchlab import docgen, shapes
-from marchlab.scene import Light, RenderSettings
+from marchlab import docgen
+from scene_model import shapes
+from scene_model.scene import Light, RenderSettings
 
 ROOT = Path(__file__).resolve().parent.parent
 

@@ -17,9 +17,9 @@ from pathlib import Path
 
 import pytest
 
-from marchlab import shapes
 from marchlab.cli import build_parser
-from marchlab.scene import RenderSettings
+from scene_model import shapes
+from scene_model.scene import RenderSettings
 
 pytest.importorskip("sphinx", reason="the docs extra is not installed: pip install -e '.[docs]'")
 pytest.importorskip("myst_nb", reason="the docs extra is not installed: pip install -e '.[docs]'")

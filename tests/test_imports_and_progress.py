@@ -19,7 +19,8 @@ def loaded_after(code: str) -> list[str]:
 
 
 def test_importing_marchlab_and_its_cli_loads_no_backend():
-    assert loaded_after("import marchlab, marchlab.cli, marchlab.builder, marchlab.compare") == []
+    code = "import marchlab, marchlab.cli, marchlab.compare, scene_model.builder"
+    assert loaded_after(code) == []
 
 
 def test_rendering_with_numpy_loads_only_the_numpy_backend():

@@ -20,9 +20,9 @@ import math
 import numpy as np
 import pytest
 
-from marchlab.builder import plane, sphere
 from reference_cpu.march import march
 from reference_cpu.scene_sdf import build_scene_sdf
+from scene_model.builder import plane, sphere
 
 EPSILON = 1e-3
 CENTRE = np.array([0.3, -0.2, 0.5])

@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 import marchlab
-from marchlab.builder import (Camera, Material, RenderSettings, Scene, SolidBackground,
-                              plane, sphere)
+from scene_model.builder import (Camera, Material, RenderSettings, Scene, SolidBackground, plane,
+                                 sphere)
 
 WIDTH, HEIGHT = 48, 36
 CENTRE = np.array([0.0, 1.5, 0.0])

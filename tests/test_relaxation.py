@@ -29,15 +29,15 @@ import re
 
 import numpy as np
 import pytest
+from test_march import CENTRE, RADIUS, ray_sphere, rays_toward_sphere, unit
 
 from gpu_shader.generate import generate
 from marchlab import render
-from marchlab.builder import Camera, RenderSettings, Scene, box, plane, sphere
 from marchlab.render import backend_problem
 from reference_cpu import relaxation as relaxation_module
 from reference_cpu.march import march
 from reference_cpu.scene_sdf import build_scene_sdf
-from test_march import CENTRE, RADIUS, ray_sphere, rays_toward_sphere, unit
+from scene_model.builder import Camera, RenderSettings, Scene, box, plane, sphere
 
 EPSILON = 1e-3
 RELAXED = [("fixed", 1.2), ("fixed", 1.5), ("fixed", 1.9), ("auto", 1.2)]
@@ -298,7 +298,7 @@ def test_opencl_counts_the_same_steps_as_numpy_at_equal_precision(relaxed_cases,
     if problem:
         pytest.skip(f"opencl backend unavailable: {problem}")
     if precision == "float64":
-        from reference_cpu.opencl import device
+        from gpu_shader.opencl import device
         if not device().fp64:
             pytest.skip(f"the OpenCL device {device().label} has no float64")
     scene = relaxed_cases[name]

@@ -11,9 +11,9 @@ import dataclasses
 import numpy as np
 import pytest
 
-import marchlab
 from marchlab import Frame
-from marchlab.builder import Camera, RenderSettings, Scene, SolidBackground, sphere
+import marchlab
+from scene_model.builder import Camera, RenderSettings, Scene, SolidBackground, sphere
 
 WIDTH, HEIGHT = 64, 48
 CENTRE = np.array([0.2, -0.1, 0.0])

@@ -1,6 +1,6 @@
 """Scene files: TOML round trips, the position/rotation/scale shorthand, and error messages.
 
-The contract under test (marchlab/scenefile.py): ``load_scene(p) == scene`` after
+The contract under test (scene_model/scenefile.py): ``load_scene(p) == scene`` after
 ``save_scene(scene, p)``, with every float back bit for bit; the writer is deterministic; and
 every bad input raises `SceneError` whose text is ``FILE: FIELD.PATH: problem``, the path being
 the one a user sees in the file (``objects[1].children[0].radius``, ``objects[0].scale``).
@@ -16,16 +16,16 @@ import tomlkit
 from hypothesis import Phase, assume, given, settings
 from hypothesis import strategies as st
 
-import marchlab
 from marchlab import SceneError, load_scene, save_scene
-from marchlab.bodies import Body, PhysicsSettings
-from marchlab.scene import (Camera, Checker, DirectionalLight, Fog, Material, PointLight,
-                            RenderSettings, Scene, SkyBackground, SolidBackground, SpotLight)
-from marchlab.scenefile import scene_to_toml
-from marchlab.shapes import (Box, Capsule, CappedCylinder, Cone, Intersection, Plane, Repeat,
-                             Rotate, RoundBox, Scale, SmoothIntersection, SmoothSubtraction,
-                             SmoothUnion, Sphere, Subtraction, Torus, Translate, Union)
-from marchlab.shapes import primitives as primitives_of
+import marchlab
+from scene_model.bodies import Body, PhysicsSettings
+from scene_model.scene import (Camera, Checker, DirectionalLight, Fog, Material, PointLight,
+                               RenderSettings, Scene, SkyBackground, SolidBackground, SpotLight)
+from scene_model.scenefile import scene_path, scene_to_toml
+from scene_model.shapes import (Box, CappedCylinder, Capsule, Cone, Intersection, Plane, Repeat,
+                                Rotate, RoundBox, Scale, SmoothIntersection, SmoothSubtraction,
+                                SmoothUnion, Sphere, Subtraction, Torus, Translate, Union,
+                                primitives as primitives_of)
 
 BUNDLED = marchlab.bundled_scene_names()
 TOP_LEVEL_KEYS = {"description", "camera", "render", "materials", "lights", "objects", "physics",
@@ -569,7 +569,7 @@ def source_of(err: SceneError) -> str:
 
 
 def names_classroom(err: SceneError) -> bool:
-    return source_of(err) in ("classroom", str(marchlab.scenefile.scene_path("classroom")))
+    return source_of(err) in ("classroom", str(scene_path("classroom")))
 
 
 def test_override_changes_the_named_field():

@@ -14,8 +14,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import marchlab
-from marchlab.errors import SceneError
-from marchlab.scenefile import scene_from_dict, scene_path
+from scene_model.errors import SceneError
+from scene_model.scenefile import scene_from_dict, scene_path
 
 SCENES = {name: tomllib.loads(scene_path(name).read_text())
           for name in marchlab.bundled_scene_names()}

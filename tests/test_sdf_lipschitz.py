@@ -25,10 +25,9 @@ import numpy as np
 from hypothesis import assume, given
 from hypothesis import strategies as st
 
-from marchlab.shapes import (Box, Capsule, CappedCylinder, Cone, Plane, RoundBox, Sphere,
-                             Torus)
 from reference_cpu import sdf as S
 from reference_cpu.scene_sdf import build_scene_sdf
+from scene_model.shapes import Box, CappedCylinder, Capsule, Cone, Plane, RoundBox, Sphere, Torus
 
 RELATIVE, ABSOLUTE = 1e-9, 1e-12    # slack for rounding: |f(p) - f(q)| <= |p - q| (1 + 1e-9) + 1e-12
 
@@ -182,7 +181,7 @@ def test_subtraction_of_exact_primitives_is_1_lipschitz(a, b, offset, pairs):
 
 @given(a=primitives(), b=primitives(), c=primitives(), offset=point, pairs=point_pairs())
 def test_csg_tree_built_with_operators_is_1_lipschitz(a, b, c, offset, pairs):
-    """(a | b.at(offset)) & c - b: the same operators through marchlab.shapes and the scene."""
+    """(a | b.at(offset)) & c - b: the same operators through scene_model.shapes and the scene."""
     assert_1_lipschitz(scene(((a | b.at(*offset)) & c) - b), *pairs)
 
 

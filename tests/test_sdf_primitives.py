@@ -16,10 +16,10 @@ from typing import Callable
 import numpy as np
 import pytest
 
-from marchlab.geometry import rotation_matrix
-from marchlab.shapes import Box, Cone, Repeat, Sphere, Torus
 from reference_cpu import sdf as S
 from reference_cpu.scene_sdf import build_scene_sdf
+from scene_model.geometry import rotation_matrix
+from scene_model.shapes import Box, Cone, Repeat, Sphere, Torus
 
 EXACT = 1e-12   # float64: the formulas lose a few ulps of numbers of size ~10
 SINGLE = 1e-5   # float32: ~100 ulps of numbers of size ~10 (float32 eps is 1.2e-7)

@@ -21,10 +21,10 @@ import numpy as np
 import pytest
 
 import marchlab
-from marchlab.builder import (Camera, DirectionalLight, Material, PointLight, RenderSettings,
-                              Scene, SolidBackground, SpotLight, plane)
 from reference_cpu import shading
 from reference_cpu.lights import attenuation, light_at, spot_cone
+from scene_model.builder import (Camera, DirectionalLight, Material, PointLight, RenderSettings,
+                                 Scene, SolidBackground, SpotLight, plane)
 
 WIDTH, HEIGHT = 9, 7          # odd: pixel (4, 3) looks exactly along the view axis
 TOLERANCE = 2e-5

@@ -18,10 +18,10 @@ import numpy as np
 import pytest
 
 import marchlab
-from marchlab.builder import (Camera, Material, PointLight, RenderSettings, Scene,
-                              SolidBackground, plane, sphere)
 from reference_cpu.scene_sdf import build_scene_sdf
 from reference_cpu.shadows import hard_shadow, soft_shadow
+from scene_model.builder import (Camera, Material, PointLight, RenderSettings, Scene,
+                                 SolidBackground, plane, sphere)
 
 CENTRE = np.array([0.0, 2.0, 0.0])
 RADIUS = 1.0

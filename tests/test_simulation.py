@@ -1,5 +1,5 @@
 """Scenes with bodies: the [physics] and [[bodies]] tables, the world built from them, and the
-scene drawn at each time step (marchlab/bodies.py, marchlab/simulation.py).
+scene drawn at each time step (scene_model/bodies.py, marchlab/simulation.py).
 
 The bundled `bounce` scene has six bodies (four dropped, two colliding) over one floor plane.
 """
@@ -13,14 +13,15 @@ import typing
 import numpy as np
 import pytest
 
-import physics
-from marchlab import SceneError, load_scene, render, save_scene
-from marchlab.bodies import (Body, Integrator, PhysicsSettings, Solver, rendered_scene,
-                             scene_at, scene_objects)
-from marchlab.builder import Material, Scene, plane, sphere
-from marchlab.shapes import Translate, primitives
-from marchlab.simulation import build_world, frame_plan, simulate_scene, static_planes
 from gpu_shader.generate import generate
+from marchlab import SceneError, load_scene, render, save_scene
+from marchlab.simulation import build_world, frame_plan, simulate, simulate_scene, static_planes
+import physics
+from scene_model.bodies import (INTEGRATOR_NAMES, SOLVER_NAMES, Body, Integrator, PhysicsSettings,
+                                Solver)
+from scene_model.builder import Material, Scene, plane, sphere
+from scene_model.scene import rendered_scene, scene_at, scene_objects
+from scene_model.shapes import Translate, primitives
 
 
 @pytest.fixture(scope="module")
@@ -87,9 +88,19 @@ def test_bad_physics_or_body_value_is_a_one_line_error_naming_its_field(assignme
     assert problem in message and "\n" not in message
 
 
+def test_an_unknown_physics_backend_is_refused_in_one_line_naming_the_choices():
+    with pytest.raises(physics.PhysicsError) as caught:
+        simulate(physics.World(), 1.0, backend="quantum")
+    message = str(caught.value)
+    assert "backend" in message and "'cpu'" in message and "'gpu'" in message
+    assert "\n" not in message
+
+
 def test_integrator_and_solver_names_are_the_ones_physics_accepts():
-    assert set(typing.get_args(Integrator)) == set(physics.INTEGRATORS)
-    assert set(typing.get_args(Solver)) == set(physics.SOLVERS)
+    assert typing.get_args(Integrator) == INTEGRATOR_NAMES
+    assert typing.get_args(Solver) == SOLVER_NAMES
+    assert set(INTEGRATOR_NAMES) == set(physics.INTEGRATORS)
+    assert set(SOLVER_NAMES) == set(physics.SOLVERS)
 
 
 # --- The world -----------------------------------------------------------------------------------

@@ -173,7 +173,7 @@ def api_markdown(package: str, first: list[str], exclude: list[str]) -> str:
     """Markdown: the package's own docstring, then a section per module with its members.
 
     A name is documented in the module that defines it, never where it is re-exported (a
-    package's ``__init__``, `marchlab.builder`): documenting it twice would make every short
+    package's ``__init__``, `scene_model.builder`): documenting it twice would make every short
     reference to it ambiguous. So a package shows only its docstring, and ``__all__`` is
     ignored in favour of what each module defines. The package comes first, as a section like
     its modules (see `parse_markdown`).

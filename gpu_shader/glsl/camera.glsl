@@ -1,4 +1,4 @@
-// The camera model, marchlab's contract (docs/scene-format.md, marchlab/camera.py): the
+// The camera model, marchlab's contract (docs/scene-format.md, scene_model/camera.py): the
 // basis and the half extents tan(fov/2) W/H and tan(fov/2) are computed once on the CPU in
 // float64; the per-pixel arithmetic runs here.
 

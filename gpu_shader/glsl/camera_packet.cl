@@ -1,5 +1,5 @@
 // The camera model for packets of rays: the packet twin of camera.glsl (marchlab's contract,
-// docs/scene-format.md, marchlab/camera.py).
+// docs/scene-format.md, scene_model/camera.py).
 //
 // Each lane computes exactly the operations of camera.glsl in the same order, so the two agree
 // to the bit (tests/opencl/test_packet_sdf.py). The pixel centres are packets; the basis and

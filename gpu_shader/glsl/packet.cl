@@ -136,7 +136,7 @@ vec3p OVERLOAD neg(vec3p v)
     return pack3(-v.x, -v.y, -v.z);
 }
 
-// (a.x b.x + a.y b.y) + a.z b.z, the order of marchlab.geometry.dot.
+// (a.x b.x + a.y b.y) + a.z b.z, the order of scene_model.geometry.dot.
 packet OVERLOAD dot(vec3p a, vec3p b)
 {
     return a.x * b.x + a.y * b.y + a.z * b.z;
@@ -152,7 +152,7 @@ packet OVERLOAD length(vec3p v)
     return sqrt(dot(v, v));
 }
 
-// v / |v|, as the reference normalises (marchlab.geometry.normalize) and as the one-ray
+// v / |v|, as the reference normalises (scene_model.geometry.normalize) and as the one-ray
 // OpenCL program does (gpu_shader/dialects.py); NaN where v = 0.
 vec3p OVERLOAD normalize(vec3p v)
 {

@@ -129,7 +129,7 @@ uniform vec3 u_high;
 
 // --- small helpers -------------------------------------------------------------------------
 
-// dot written out in the CPU's order, (a.x b.x + a.y b.y) + a.z b.z (marchlab.geometry.dot).
+// dot written out in the CPU's order, (a.x b.x + a.y b.y) + a.z b.z (scene_model.geometry.dot).
 float dot3(vec3 a, vec3 b) { return (a.x * b.x + a.y * b.y) + a.z * b.z; }
 
 // Row-wise cross product p x q (physics.impulses.cross).

@@ -255,7 +255,7 @@ vec3 background(vec3 direction)
     return background_sky(direction, BACKGROUND_BOTTOM, BACKGROUND_TOP);
 }
 
-// The heat ramp of marchlab/colormaps.py, linear between its stops (HEAT(i, 0): colour and
+// The heat ramp of scene_model/colormaps.py, linear between its stops (HEAT(i, 0): colour and
 // x at the segment's start, HEAT(i, 1): at its end, HEAT(i, 2).x: its width).
 vec3 heat(real x)
 {

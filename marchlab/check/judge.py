@@ -32,10 +32,10 @@ import traceback
 
 import numpy as np
 
-from marchlab.geometry import normalize
-from marchlab.shapes import Box, Plane, Sphere, Translate
 from reference_cpu import shading as SH
 from reference_cpu.scene_sdf import build_scene_sdf
+from scene_model.geometry import normalize
+from scene_model.shapes import Box, Plane, Sphere, Translate
 
 from .result import CheckResult
 

@@ -15,11 +15,10 @@ from typing import Callable
 
 import numpy as np
 
-from marchlab.geometry import normalize
 from reference_cpu import march as M
+from scene_model.geometry import normalize
 
-from .judge import (SAMPLES, TOLERANCE, _bad, _call, _errors, _fmt, _test_scene_sdf, _units,
-                    _verdict)
+from .judge import SAMPLES, TOLERANCE, _bad, _call, _errors, _fmt, _test_scene_sdf, _units, _verdict
 from .result import CheckResult
 
 __all__ = ["march"]

@@ -13,8 +13,8 @@ from typing import Callable
 
 import numpy as np
 
-from marchlab.geometry import rotation_matrix
 from reference_cpu import sdf as S
+from scene_model.geometry import rotation_matrix
 
 from .judge import CASES, SAMPLES, _compare, _points
 from .result import CheckResult

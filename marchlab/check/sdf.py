@@ -13,8 +13,8 @@ from typing import Callable
 
 import numpy as np
 
-from marchlab.geometry import dot
 from reference_cpu import sdf as S
+from scene_model.geometry import dot
 
 from .judge import CASES, _compare, _points
 from .result import CheckResult

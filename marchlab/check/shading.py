@@ -13,9 +13,9 @@ from typing import Callable
 
 import numpy as np
 
-from marchlab.geometry import dot, normalize
 from reference_cpu import shading as SH
 from reference_cpu.lights import attenuation as _attenuation
+from scene_model.geometry import dot, normalize
 
 from .judge import CASES, SAMPLES, _compare, _points, _units
 from .result import CheckResult

@@ -12,10 +12,8 @@ from typing import Callable
 
 import numpy as np
 
-from marchlab.geometry import normalize
-from reference_cpu import march as M
-from reference_cpu import sdf as S
-from reference_cpu import shadows as SW
+from reference_cpu import march as M, sdf as S, shadows as SW
+from scene_model.geometry import normalize
 
 from .judge import SAMPLES, _compare, _test_scene_sdf
 from .result import CheckResult

@@ -11,11 +11,11 @@ from __future__ import annotations
 import dataclasses
 
 from marchlab import load_scene
-from marchlab.builder import (Camera, Checker, DirectionalLight, Fog, Material, PointLight,
-                              RenderSettings, Scene, SkyBackground, SolidBackground, SpotLight,
-                              box, capped_cylinder, capsule, cone, plane, round_box, sphere,
-                              torus)
-from marchlab.scenefile import bundled_scene_names
+from scene_model.builder import (Camera, Checker, DirectionalLight, Fog, Material, PointLight,
+                                 RenderSettings, Scene, SkyBackground, SolidBackground, SpotLight,
+                                 box, capped_cylinder, capsule, cone, plane, round_box, sphere,
+                                 torus)
+from scene_model.scenefile import bundled_scene_names
 
 SIZE = (64, 48)            # feature cases: small enough for CI, large enough to see edges
 BUNDLED_SIZE = (96, 72)

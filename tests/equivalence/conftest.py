@@ -17,7 +17,7 @@ import pytest
 
 from marchlab import render
 from marchlab.render import BACKENDS, backend_problem
-from marchlab.scenefile import scene_to_toml
+from scene_model.scenefile import scene_to_toml
 
 CANDIDATES = [name for name in BACKENDS if name != "numpy"]
 

@@ -1,7 +1,7 @@
 """The OpenCL backend against the NumPy reference at equal precision, under tight bounds.
 
 The opencl backend runs the reference's algorithm compiled, with exact IEEE arithmetic
-(`reference_cpu.opencl.build_options`), so at equal precision it must agree with NumPy far
+(`gpu_shader.opencl.build_options`), so at equal precision it must agree with NumPy far
 more closely than the gates of `test_equivalence.py` ask of every backend. For each bundled
 scene and feature case (`cases.py`):
 
@@ -40,11 +40,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from gpu_shader.opencl import device as opencl_device
 from marchlab import render
 from marchlab.compare import (Comparison, Gates, compare_frames, failures, gates_against,
                               write_difference_images)
 from marchlab.render import backend_problem
-from reference_cpu.opencl import device as opencl_device
 
 from .cases import all_cases
 from .conftest import reference_frame

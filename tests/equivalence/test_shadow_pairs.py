@@ -17,7 +17,7 @@ import pytest
 
 import gpu_shader.generate as generator
 from marchlab import load_scene, render
-from marchlab.builder import Checker, Material, PointLight, Scene, plane, sphere
+from scene_model.builder import Checker, Material, PointLight, Scene, plane, sphere
 
 WIDTH, HEIGHT = 64, 48
 BUFFERS = ("color", "depth", "normal", "steps", "object_id", "hit", "path")

@@ -13,15 +13,14 @@ import math
 import numpy as np
 import pytest
 
-import marchlab
-from marchlab import MarchlabError
-from marchlab.builder import Camera, Scene, sphere
-from marchlab.render import backend_problem
-
 import gpu_shader.context as context
-import gpu_shader.render as gpu_render
 from gpu_shader.generate import generate
 from gpu_shader.render import Renderer, ShaderCompileError
+import gpu_shader.render as gpu_render
+from marchlab import MarchlabError
+import marchlab
+from marchlab.render import backend_problem
+from scene_model.builder import Camera, Scene, sphere
 
 # A camera on the z axis looking down -z: image row 0 is the top, x grows to the right.
 CAMERA = Camera(position=(0.0, 0.0, 5.0), look_at=(0.0, 0.0, 0.0), fov=60.0)
@@ -271,7 +270,7 @@ def test_scene_too_large_for_a_private_copy_reads_the_buffer_and_matches_the_ref
 
     200 spheres need 400 rows. Gates as in the equivalence suite (float32 reference).
     """
-    from marchlab.builder import Checker, Material, Scene, plane, sphere
+    from scene_model.builder import Checker, Material, Scene, plane, sphere
     from marchlab.compare import compare_frames, failures, gates_against
     from gpu_shader.dialects import MAX_PRIVATE_ROWS
     from gpu_shader.generate import generate
@@ -302,7 +301,7 @@ def test_parameters_as_flat_varyings_or_a_private_copy_give_the_same_frame_to_th
     exactly MAX_FLAT_ROWS."""
     from gpu_shader.dialects import MAX_FLAT_ROWS
     from gpu_shader.render import render_program
-    from marchlab.shapes import primitives
+    from scene_model.shapes import primitives
 
     scene = marchlab.load_scene(scene_name)
     flat = generate(scene, 48, 36)

@@ -13,12 +13,11 @@ import re
 import numpy as np
 import pytest
 from PIL import Image
+from cli_helpers import assert_one_line_error, run_cli
 
 import marchlab
-from marchlab.builder import Camera, Scene, sphere
 from marchlab.compare import Gates, compare_frames, failures, gates_against
-
-from cli_helpers import assert_one_line_error, run_cli
+from scene_model.builder import Camera, Scene, sphere
 
 SIZE = "48x36"
 

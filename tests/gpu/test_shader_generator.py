@@ -16,11 +16,10 @@ from typing import ClassVar
 
 import pytest
 
-from marchlab import MarchlabError, load_scene, save_scene
-from marchlab.builder import Scene, box, sphere
-from marchlab.shapes import Box, Primitive, Repeat, Sphere, node_kinds, primitives
-
 from gpu_shader.generate import generate
+from marchlab import MarchlabError, load_scene, save_scene
+from scene_model.builder import Scene, box, sphere
+from scene_model.shapes import Box, Primitive, Repeat, Sphere, node_kinds, primitives
 
 WIDTH, HEIGHT = 32, 24
 
@@ -268,7 +267,7 @@ def make_custom_node():
     """
     import gc
 
-    from marchlab.fields import field_types, param
+    from scene_model.fields import field_types, param
 
     def make(**values):
         @dataclasses.dataclass(frozen=True)

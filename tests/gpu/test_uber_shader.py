@@ -17,15 +17,14 @@ import dataclasses
 import numpy as np
 import pytest
 
-import marchlab
-from marchlab import MarchlabError, load_scene
-from marchlab.builder import (DirectionalLight, Fog, Scene, SolidBackground, SpotLight, box,
-                              sphere)
-from marchlab.shapes import Primitive, Rotate, Scale, Translate
-
 from gpu_shader.render import render_program
-from gpu_shader.uber import (OBJECT_STRIDE, OBJECTS_START, ROWS, SHAPE_ROW, SHAPES,
+from gpu_shader.uber import (OBJECTS_START, OBJECT_STRIDE, ROWS, SHAPES, SHAPE_ROW,
                              compare_specialised_uber, uber_program)
+from marchlab import MarchlabError, load_scene
+import marchlab
+from scene_model.builder import (DirectionalLight, Fog, Scene, SolidBackground, SpotLight, box,
+                                 sphere)
+from scene_model.shapes import Primitive, Rotate, Scale, Translate
 
 BUNDLED = ("classroom", "lights", "primitives")
 BUNDLED_SIZE = (96, 72)

@@ -23,8 +23,8 @@ import numpy as np
 import pytest
 
 from marchlab import render
-from marchlab.frame import Frame
 from marchlab.render import BACKENDS, backend_problem
+from scene_model.frame import Frame
 
 RENDERERS = [(name, precision) for name, backend in BACKENDS.items()
              for precision in backend.precisions]
@@ -79,7 +79,7 @@ def renderer_problem(backend: str, precision: str) -> str | None:
     if problem:
         return f"{backend} backend unavailable: {problem}"
     if backend == "opencl" and precision == "float64":
-        from reference_cpu.opencl import device
+        from gpu_shader.opencl import device
         if not device().fp64:
             return f"the OpenCL device {device().label} has no float64 (cl_khr_fp64)"
     return None

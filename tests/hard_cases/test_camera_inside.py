@@ -25,9 +25,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from marchlab.builder import Camera, PointLight, RenderSettings, Scene, sphere
 from reference_cpu.march import march
 from reference_cpu.scene_sdf import build_scene_sdf
+from scene_model.builder import Camera, PointLight, RenderSettings, Scene, sphere
 
 from .conftest import dot, pixel_rays, ray_sphere, unit
 

@@ -29,8 +29,8 @@ import math
 import numpy as np
 import pytest
 
-from marchlab.builder import (Camera, Checker, Material, RenderSettings, Scene,
-                              SolidBackground, plane, sphere)
+from scene_model.builder import (Camera, Checker, Material, RenderSettings, Scene, SolidBackground,
+                                 plane, sphere)
 
 from .conftest import pixel_rays
 

@@ -26,7 +26,7 @@ import math
 import numpy as np
 import pytest
 
-from marchlab.builder import Camera, PointLight, RenderSettings, Scene, sphere
+from scene_model.builder import Camera, PointLight, RenderSettings, Scene, sphere
 
 from .conftest import dot, pixel_rays, ray_sphere
 

@@ -30,9 +30,9 @@ import math
 import numpy as np
 import pytest
 
-from marchlab.builder import Camera, RenderSettings, Scene, SolidBackground, plane
 from reference_cpu.march import march
 from reference_cpu.scene_sdf import build_scene_sdf
+from scene_model.builder import Camera, RenderSettings, Scene, SolidBackground, plane
 
 from .conftest import pixel_rays
 

@@ -30,13 +30,12 @@ import math
 import numpy as np
 import pytest
 
-from marchlab.builder import plane, sphere
 from reference_cpu.march import march
 from reference_cpu.scene_sdf import build_scene_sdf
+from scene_model.builder import plane, sphere
 
 from .conftest import pixel_rays
-from .test_grazing_floor import HEIGHT, HEIGHT_PX, MAX_STEPS, WIDTH, horizon_scene, \
-    plane_step_count
+from .test_grazing_floor import HEIGHT, HEIGHT_PX, MAX_STEPS, WIDTH, horizon_scene, plane_step_count
 
 MAX_DISTANCE = 1000.0       # that of horizon_scene
 

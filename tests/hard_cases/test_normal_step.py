@@ -24,9 +24,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from marchlab.builder import Camera, PointLight, RenderSettings, Scene, sphere
 from reference_cpu.normals import STENCILS, estimate_normal
 from reference_cpu.scene_sdf import build_scene_sdf
+from scene_model.builder import Camera, PointLight, RenderSettings, Scene, sphere
 
 from .conftest import pixel_rays, unit
 

@@ -25,12 +25,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from marchlab.builder import (Camera, DirectionalLight, Material, RenderSettings, Scene,
-                              SolidBackground, plane)
 from reference_cpu.march import march
 from reference_cpu.normals import estimate_normal
 from reference_cpu.scene_sdf import build_scene_sdf
 from reference_cpu.shadows import hard_shadow
+from scene_model.builder import (Camera, DirectionalLight, Material, RenderSettings, Scene,
+                                 SolidBackground, plane)
 
 from .conftest import pixel_rays, unit
 

@@ -26,7 +26,7 @@ import math
 import numpy as np
 import pytest
 
-from marchlab.builder import Camera, RenderSettings, Scene, SolidBackground, sphere
+from scene_model.builder import Camera, RenderSettings, Scene, SolidBackground, sphere
 
 from .conftest import pixel_rays, ray_sphere
 

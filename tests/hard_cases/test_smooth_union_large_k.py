@@ -28,9 +28,9 @@ import functools
 import numpy as np
 import pytest
 
-from marchlab.builder import Camera, PointLight, RenderSettings, Scene, box, sphere
 from reference_cpu.march import columns, march
 from reference_cpu.scene_sdf import build_scene_sdf
+from scene_model.builder import Camera, PointLight, RenderSettings, Scene, box, sphere
 
 from .conftest import pixel_rays, unit
 

@@ -26,10 +26,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from marchlab.builder import (Camera, Material, PointLight, RenderSettings, Scene, plane,
-                              sphere)
 from reference_cpu.scene_sdf import build_scene_sdf
 from reference_cpu.shadows import soft_shadow
+from scene_model.builder import Camera, Material, PointLight, RenderSettings, Scene, plane, sphere
 
 from .conftest import pixel_rays, ray_sphere, unit
 

@@ -34,8 +34,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from marchlab.builder import Camera, PointLight, RenderSettings, Scene, box, plane
-from marchlab.geometry import rotation_matrix
+from scene_model.builder import Camera, PointLight, RenderSettings, Scene, box, plane
+from scene_model.geometry import rotation_matrix
 
 from .conftest import pixel_rays
 

@@ -15,12 +15,9 @@ import pytest
 
 from marchlab import check
 from marchlab.check import graphics
-from marchlab.geometry import dot, normalize
-from reference_cpu import march as M
-from reference_cpu import sdf as S
-from reference_cpu import shading as SH
-from reference_cpu import shadows as SW
+from reference_cpu import march as M, sdf as S, shading as SH, shadows as SW
 from reference_cpu.lights import attenuation
+from scene_model.geometry import dot, normalize
 
 REFERENCES = {
     "sdf_sphere": S.sdf_sphere, "sdf_box": S.sdf_box, "sdf_round_box": S.sdf_round_box,

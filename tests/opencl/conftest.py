@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import pytest
 
-import reference_cpu.opencl as opencl
+import gpu_shader.opencl as opencl
 from marchlab.render import backend_problem
 
 

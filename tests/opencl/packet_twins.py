@@ -39,7 +39,7 @@ import pytest
 
 from gpu_shader.dialects import PACKET_LANES, dialect
 from gpu_shader.library import load_library
-from reference_cpu.opencl import build_options
+from gpu_shader.opencl import build_options
 
 LANES = PACKET_LANES
 
@@ -85,7 +85,7 @@ def run_twins(device, precision: str, scalar_source: str, packet_source: str,
 
     Parameters
     ----------
-    device : reference_cpu.opencl.Device
+    device : gpu_shader.opencl.Device
     precision : {"float32", "float64"}
     scalar_source, packet_source : str
         The functions under test and a kernel

@@ -1,11 +1,11 @@
-"""The opencl backend (`reference_cpu.opencl`) and the OpenCL C it runs (`gpu_shader.dialects`).
+"""The opencl backend (`gpu_shader.opencl`) and the OpenCL C it runs (`gpu_shader.dialects`).
 
 Three groups of tests:
 
 - `thread_parameters`, the rewrite that passes the parameter buffer ``P`` to every function
   that reads it, on small hand-written sources (plain Python, never skipped);
 - device selection, with a fake pyopencl whose devices build or fail as each test says
-  (never skipped; the process's real choice, `reference_cpu.opencl._chosen`, is put back by
+  (never skipped; the process's real choice, `gpu_shader.opencl._chosen`, is put back by
   monkeypatch after each test);
 - real renders, which take the ``opencl_device`` fixture (tests/opencl/conftest.py) and
   are skipped, with the reason, where pyopencl or a working OpenCL device is missing.
@@ -22,14 +22,13 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-import marchlab
-from marchlab import MarchlabError
-from marchlab.builder import Camera, Scene, sphere
-from marchlab.render import backend_problem
-
-import reference_cpu.opencl as opencl
 from gpu_shader.dialects import thread_parameters
 from gpu_shader.generate import generate
+import gpu_shader.opencl as opencl
+from marchlab import MarchlabError
+import marchlab
+from marchlab.render import backend_problem
+from scene_model.builder import Camera, Scene, sphere
 
 # A camera on the z axis looking down -z at the origin, as in tests/gpu/test_gpu_backend.py.
 CAMERA_Z = 5.0

@@ -14,11 +14,10 @@ import re
 import numpy as np
 import pytest
 from PIL import Image
-
-import marchlab
-import reference_cpu.opencl as opencl
-
 from cli_helpers import assert_one_line_error, leftovers, run_cli, run_marchlab
+
+import gpu_shader.opencl as opencl
+import marchlab
 
 
 # --- marchlab shader --dialect opencl ---------------------------------------------------------

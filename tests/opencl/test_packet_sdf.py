@@ -21,13 +21,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
-from marchlab.builder import Camera
-from marchlab.camera import camera_basis
-
-# tests/opencl, on the path as the tests' folder
 from packet_twins import (LANES, Case, TwinCases, assert_bits_equal, assert_twin_names, mix,
                           near, need_precision, per_packet, pick, units)
+
+from scene_model.builder import Camera
+from scene_model.camera import camera_basis
 
 SEED = 20240611
 BLOCKS = 128                 # packets of LANES rows; the parameters change from one to the next

@@ -37,7 +37,6 @@ RADIUS = 0.1
     (lambda: physics.World().step(-1), "n"),
     (lambda: physics.simulate(physics.World(), -1.0), "seconds"),
     (lambda: physics.simulate(physics.World(), 1.0, record_every=0), "record_every"),
-    (lambda: physics.simulate(physics.World(), 1.0, backend="quantum"), "backend"),
 ])
 def test_bad_argument_raises_a_one_line_value_error_naming_it(make, name):
     with pytest.raises(ValueError) as error:

@@ -1,4 +1,4 @@
-"""The analytic ground truth (reference_cpu.truth_analytic) against answers worked out by hand.
+"""The analytic ground truth (reference_cpu.truth.analytic) against answers worked out by hand.
 
 Every expected value below is a closed form: a ray meeting a sphere, a box face or a plane.
 Tolerances are float64 rounding of a few operations on numbers of order 10: 1e-12 unless
@@ -12,12 +12,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from marchlab.builder import Camera, RenderSettings, Scene, box, plane, sphere, torus, union
-from marchlab.errors import SceneError
 from reference_cpu.scene_sdf import build_scene_sdf
 from reference_cpu.truth import ground_truth
-from reference_cpu.truth_analytic import trace_analytic
-from reference_cpu.truth_parts import scene_parts
+from reference_cpu.truth.analytic import trace_analytic
+from reference_cpu.truth.parts import scene_parts
+from scene_model.builder import Camera, RenderSettings, Scene, box, plane, sphere, torus, union
+from scene_model.errors import SceneError
 
 TOL = 1e-12
 
@@ -191,7 +191,7 @@ def test_every_analytic_hit_lies_on_the_scene_sdf_zero_set_with_its_gradient_as_
                   objects=tuple(objects))
     truth = ground_truth(scene, 16, 12)
     assert truth.measured_error <= 1e-9
-    from marchlab.camera import camera_rays
+    from scene_model.camera import camera_rays
     origin, directions = camera_rays(scene.camera, 16, 12)
     points = origin + np.where(truth.hit, truth.depth, 0)[..., None] * directions
     points = points[truth.hit]

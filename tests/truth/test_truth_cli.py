@@ -4,12 +4,12 @@ import sys
 
 import numpy as np
 import pytest
-
 from cli_helpers import assert_one_line_error, leftovers, run_cli
+
 from marchlab import cli
-from marchlab.builder import Scene, plane, sphere, torus
-from marchlab.scenefile import save_scene
 from reference_cpu.truth import METHODS, ground_truth
+from scene_model.builder import Scene, plane, sphere, torus
+from scene_model.scenefile import save_scene
 
 KEYS = {"depth", "normal", "hit", "object_id", "method", "error_bound", "error_rounding",
         "measured_error", "measured_error_p99"}

@@ -12,15 +12,15 @@ import math
 
 import numpy as np
 import pytest
-
-import marchlab
-from marchlab.builder import Camera, RenderSettings, Scene, sphere
-from marchlab.errors import SceneError
-from marchlab.shapes import Scale
-from reference_cpu.scene_sdf import build_scene_sdf
-from reference_cpu.truth import ground_truth
 from truth_scenes import (CSG, EPSILON, HEIGHT, SPHERE_PLANE_BOX, WIDTH, cos_incidence,
                           near_silhouette)
+
+import marchlab
+from reference_cpu.scene_sdf import build_scene_sdf
+from reference_cpu.truth import ground_truth
+from scene_model.builder import Camera, RenderSettings, Scene, sphere
+from scene_model.errors import SceneError
+from scene_model.shapes import Scale
 
 pytestmark = pytest.mark.usefixtures("embree")
 
@@ -83,7 +83,7 @@ def test_embree_normals_match_analytic_within_a_facets_tilt(tessellated):
 def test_embree_from_inside_overlapping_solids_leaves_through_the_union(embree):
     # The camera sits inside a sphere that overlaps another and a box: the shells crossed
     # inside the other solids are not surfaces of the union, and Embree, which sees every
-    # triangle, must be cast again past them (reference_cpu.truth_embree).
+    # triangle, must be cast again past them (reference_cpu.truth.embree).
     scene = Scene(camera=Camera(position=(0, 0, 0.2), look_at=(0, 0, -1), fov=90),
                   objects=(sphere(1.0), sphere(0.8).at(0.9, 0, 0),
                            sphere(0.5).at(0, 0, -1.2)))

@@ -1,12 +1,12 @@
-"""The meshes of the Embree ground truth (reference_cpu.truth_mesh) against closed forms."""
+"""The meshes of the Embree ground truth (reference_cpu.truth.mesh) against closed forms."""
 
 import math
 
 import numpy as np
 import pytest
 
-from reference_cpu.truth_mesh import (box_mesh, face_normals, icosphere, orient_outward,
-                                      plane_mesh, sdf_mesh, sphere_mesh)
+from reference_cpu.truth.mesh import (box_mesh, face_normals, icosphere, orient_outward, plane_mesh,
+                                      sdf_mesh, sphere_mesh)
 
 
 def signed_volume(vertices, faces):

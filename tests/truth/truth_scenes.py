@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from marchlab.builder import Camera, RenderSettings, Scene, box, plane, sphere, torus
+from scene_model.builder import Camera, RenderSettings, Scene, box, plane, sphere, torus
 
 WIDTH, HEIGHT = 64, 48
 EPSILON = 1e-3

@@ -3,7 +3,7 @@
 The scene is the union of its top-level objects (docs/scene-format.md), and a ``union`` node is
 a union too, so both are taken apart; translate, rotate and scale nodes around them are folded
 into one similarity transform per part. What is left at the bottom, a *leaf*, is a primitive
-(which `reference_cpu.truth_analytic` intersects exactly and `reference_cpu.truth_mesh`
+(which `reference_cpu.truth.analytic` intersects exactly and `reference_cpu.truth.mesh`
 tessellates) or any other subtree (which the mesher samples and meshes as a whole).
 
 A part places its leaf in the world by the similarity x = offset + scale * R @ x_local; a
@@ -17,11 +17,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from marchlab.geometry import rotation_matrix
-from marchlab.scenefile import SHORTHAND
-from marchlab.shapes import Node, Rotate, Scale, Translate, Union, primitives
+from scene_model.geometry import rotation_matrix
+from scene_model.scenefile import SHORTHAND
+from scene_model.shapes import Node, Rotate, Scale, Translate, Union, primitives
 
-from .scene_sdf import build_scene_sdf
+from ..scene_sdf import build_scene_sdf
 
 
 @dataclass(frozen=True)
@@ -36,7 +36,7 @@ class Part:
         Where ``leaf`` sits in the scene file, e.g. ``("objects", 2)``, for error messages.
     first_id : int
         Object id of the first primitive under ``leaf`` (depth-first, as
-        `marchlab.shapes.primitives` numbers them).
+        `scene_model.shapes.primitives` numbers them).
     rotation : (3, 3) ndarray
         R, float64.
     scale : float
@@ -84,7 +84,7 @@ def _parts(node, path, rotation, scale, offset, first_id):
     """Yield the parts under ``node``, whose frame is placed by (rotation, scale, offset)."""
     # The path names the table in the scene file: its shorthand keys (position, rotation,
     # scale) become an outer translate(rotate(scale(...))) chain that shares the table's path,
-    # as marchlab.scenefile writes and reads it. Other transform nodes add ".child".
+    # as scene_model.scenefile writes and reads it. Other transform nodes add ".child".
     for cls, _ in SHORTHAND.values():
         if type(node) is cls:
             rotation, scale, offset = _fold(node, rotation, scale, offset)

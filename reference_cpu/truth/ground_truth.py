@@ -3,9 +3,9 @@
 Two methods, both over the same primary rays as every renderer (`marchlab.camera_rays`, float64):
 
 - ``"analytic"``: exact float64 ray intersections with unions of spheres, boxes and planes
-  (`reference_cpu.truth_analytic`). Its error is float64 rounding.
-- ``"embree"``: any bounded scene, meshed (`reference_cpu.truth_mesh`) and ray-cast in float32
-  by Intel Embree (`reference_cpu.truth_embree`). Its error is the mesh's distance from the
+  (`reference_cpu.truth.analytic`). Its error is float64 rounding.
+- ``"embree"``: any bounded scene, meshed (`reference_cpu.truth.mesh`) and ray-cast in float32
+  by Intel Embree (`reference_cpu.truth.embree`). Its error is the mesh's distance from the
   true surface, stated as a bound and measured at every hit.
 
 Both follow the rendering contract where it is geometry: t is the distance along the unit ray,
@@ -22,15 +22,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from marchlab.bodies import rendered_scene
-from marchlab.camera import camera_rays
-from marchlab.errors import MarchlabError
-from marchlab.render import MAX_SIDE
-from marchlab.scene import Scene
+from scene_model.camera import camera_rays, check_image_size
+from scene_model.errors import MarchlabError
+from scene_model.scene import Scene, rendered_scene
 
-from .scene_sdf import build_scene_sdf
-from .truth_analytic import trace_analytic
-from .truth_parts import Part, part_sdf, scene_parts
+from ..scene_sdf import build_scene_sdf
+from .analytic import trace_analytic
+from .parts import Part, part_sdf, scene_parts
 
 METHODS = ("analytic", "embree")
 DEFAULT_RESOLUTION = 128
@@ -49,7 +47,7 @@ class Truth:
         Unit outward normal there; 0 on a miss.
     hit : (H, W) bool ndarray
     object_id : (H, W) int32 ndarray
-        Depth-first index of the primitive hit (`marchlab.shapes.primitives`); -1 on a miss.
+        Depth-first index of the primitive hit (`scene_model.shapes.primitives`); -1 on a miss.
     method : str
         ``"analytic"`` or ``"embree"``.
     error_bound : float
@@ -108,9 +106,7 @@ def ground_truth(scene: Scene, width: int, height: int, method: str = "analytic"
         raise MarchlabError(f"unknown method {method!r} (one of: {', '.join(METHODS)})")
     if not isinstance(scene, Scene):
         raise MarchlabError(f"scene must be a marchlab.Scene (got {type(scene).__name__})")
-    for name, value in (("width", width), ("height", height)):
-        if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= MAX_SIDE:
-            raise MarchlabError(f"{name} must be an integer from 1 to {MAX_SIDE} (got {value!r})")
+    check_image_size(width, height)
     scene = rendered_scene(scene)
     parts = scene_parts(scene.objects)
     origin, directions = camera_rays(scene.camera, width, height, np.float64)
@@ -158,9 +154,9 @@ def _trace_embree(parts: list[Part], scene: Scene, origin, rays, resolution: int
 
     Returns t, normal, object_id, the rounding bound of each ray, and the mesh error terms.
     """
-    from .truth_embree import (FLOAT32_EPS, ROUNDING_ULPS, SCENE_BOX, cast, import_embreex,
+    from .embree import (FLOAT32_EPS, ROUNDING_ULPS, SCENE_BOX, cast, import_embreex,
                                scene_frame)
-    from .truth_mesh import part_mesh
+    from .mesh import part_mesh
 
     import_embreex()                          # say what is missing before meshing anything
     if isinstance(resolution, bool) or not isinstance(resolution, int) or resolution < 2:

@@ -20,8 +20,18 @@ import math
 
 import numpy as np
 
+from .errors import MarchlabError
 from .geometry import normalize
 from .scene import Camera
+
+MAX_SIDE = 16384      # the usual largest GPU texture; far beyond what a lesson needs
+
+
+def check_image_size(width, height) -> None:
+    """Raise `MarchlabError` unless ``width`` and ``height`` are integers from 1 to MAX_SIDE."""
+    for name, value in (("width", width), ("height", height)):
+        if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= MAX_SIDE:
+            raise MarchlabError(f"{name} must be an integer from 1 to {MAX_SIDE} (got {value!r})")
 
 
 def camera_basis(camera: Camera) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -30,7 +30,7 @@ class Frame:
     steps : (H, W) int32 ndarray
         SDF evaluations the primary ray took.
     object_id : (H, W) int32 ndarray
-        Depth-first index of the primitive hit (`marchlab.shapes.primitives`); -1 on a miss.
+        Depth-first index of the primitive hit (`scene_model.shapes.primitives`); -1 on a miss.
     hit : (H, W) bool ndarray
     gamma : float
         Display gamma used by `image` and `save`.

@@ -21,12 +21,13 @@ from typing import Callable
 
 import numpy as np
 
-from gpu_shader.dialects import PACKET_LANES
-from gpu_shader.generate import generate
-from gpu_shader.planes import frame_from_planes, row_bands
-from marchlab.errors import MarchlabError
-from marchlab.frame import Frame
-from marchlab.scene import Scene
+from scene_model.errors import MarchlabError
+from scene_model.frame import Frame
+from scene_model.scene import Scene
+
+from .dialects import PACKET_LANES
+from .generate import generate
+from .planes import frame_from_planes, row_bands
 
 DEVICE_VARIABLE = "MARCHLAB_OPENCL_DEVICE"
 INSTALL_HINT = ("install a working OpenCL CPU driver (Debian/Ubuntu: apt install "

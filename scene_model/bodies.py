@@ -1,28 +1,27 @@
 """The moving part of a scene: the ``[physics]`` settings and the dynamic spheres, ``[[bodies]]``.
 
 A `Body` is a solid sphere that the physics module moves and every renderer draws. It is plain
-data like the rest of the scene: `scene_objects` turns the bodies into one translated sphere
-each, appended after the scene's own objects, and `scene_at` gives the scene with its bodies
-moved to the centres of one time step. Stepping the world is marchlab/simulation.py's job.
+data like the rest of the scene: `body_sphere` is the sphere drawn for it, and
+`scene_model.scene` puts the bodies into a scene (`scene_objects`, `scene_at`). Stepping the
+world is the physics engine's job (physics/, driven by marchlab/simulation.py).
 """
 
 from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Literal
+from typing import Literal
 
 from .errors import SceneError
-from .fields import Vec3, Record, at_least, nonnegative, param, positive, unit_interval
+from .fields import Record, Vec3, at_least, nonnegative, param, positive, unit_interval
 from .shapes import Node, Sphere, Translate
 
-if TYPE_CHECKING:
-    from .scene import Scene
-
-# The names physics.INTEGRATORS and physics.SOLVERS use (a test keeps the two lists equal;
-# marchlab.scene cannot import physics, which itself imports marchlab).
-Integrator = Literal["semi_implicit", "explicit", "verlet"]
-Solver = Literal["sequential", "simultaneous"]
+# The names of the time-stepping schemes and contact solvers, here once: the scene format
+# accepts them, and physics.INTEGRATORS and physics.SOLVERS are keyed by them.
+INTEGRATOR_NAMES = ("semi_implicit", "explicit", "verlet")
+SOLVER_NAMES = ("sequential", "simultaneous")
+Integrator = Literal[INTEGRATOR_NAMES]
+Solver = Literal[SOLVER_NAMES]
 
 
 @dataclass(frozen=True)
@@ -76,43 +75,3 @@ def body_sphere(body: Body, position=None) -> Node:
     (default: the body's own position)."""
     centre = body.position if position is None else position
     return Translate(Sphere(body.radius, material=body.material), centre)
-
-
-def scene_objects(scene: Scene, positions=None) -> tuple[Node, ...]:
-    """The objects a renderer draws: the scene's objects, then one sphere per body.
-
-    The bodies come last, so the object id of every static object (its depth-first index)
-    is the same with or without bodies.
-
-    Parameters
-    ----------
-    scene : Scene
-    positions : (N, 3) array_like, optional
-        Centres of the N bodies (default: their positions in the scene).
-    """
-    if positions is None:
-        positions = [None] * len(scene.bodies)
-    elif len(positions) != len(scene.bodies):
-        raise ValueError(f"expected {len(scene.bodies)} positions, got {len(positions)}")
-    return scene.objects + tuple(body_sphere(body, p) for body, p in zip(scene.bodies, positions))
-
-
-def scene_at(scene: Scene, positions) -> Scene:
-    """``scene`` with its bodies moved to ``positions`` ((N, 3), one row per body).
-
-    Only numbers change, so a generated shader's text (and the GPU's compiled program) is
-    the same for every time step.
-    """
-    if len(positions) != len(scene.bodies):
-        raise ValueError(f"expected {len(scene.bodies)} positions, got {len(positions)}")
-    bodies = tuple(dataclasses.replace(body, position=tuple(float(c) for c in p))
-                   for body, p in zip(scene.bodies, positions))
-    return dataclasses.replace(scene, bodies=bodies)
-
-
-def rendered_scene(scene: Scene) -> Scene:
-    """``scene`` with its bodies turned into objects (and none left as bodies), as a renderer
-    wants it; a scene without bodies is returned unchanged."""
-    if not scene.bodies:
-        return scene
-    return dataclasses.replace(scene, objects=scene_objects(scene), bodies=())

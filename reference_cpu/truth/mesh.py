@@ -8,7 +8,7 @@
   triangles inside it, so a triangle is at most r - (distance from the centre to its plane) away
   from the sphere: that maximum is the mesh's computed error.
 - **Anything else** (tori, cones, CSG, smooth blends, limited repetition) is sampled on a grid
-  over its bounding sphere (`marchlab.bounds.bounding_sphere`) and meshed by marching cubes
+  over its bounding sphere (`scene_model.bounds.bounding_sphere`) and meshed by marching cubes
   (Lorensen and Cline, SIGGRAPH 1987; scikit-image's Lewiner et al. 2003 variant). Its error
   is stated as half a cell diagonal and measured by the caller.
 
@@ -23,13 +23,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from marchlab.bounds import bounding_sphere
-from marchlab.errors import SceneError
-from marchlab.geometry import dot
-from marchlab.shapes import Box, Plane, Repeat, Sphere
+from scene_model.bounds import bounding_sphere
+from scene_model.errors import SceneError
+from scene_model.geometry import dot
+from scene_model.shapes import Box, Plane, Repeat, Sphere
 
-from .scene_sdf import build_scene_sdf
-from .truth_parts import Part
+from ..scene_sdf import build_scene_sdf
+from .parts import Part
 
 MAX_ICOSPHERE_LEVEL = 7      # 327,680 triangles
 MARGIN_CELLS = 2             # grid cells kept between the bounding sphere and the grid's side

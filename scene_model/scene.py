@@ -7,14 +7,15 @@ docs/scene-format.md describes every field (generated from the ``doc`` strings b
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import ClassVar, Literal
 
-from .bodies import Body, PhysicsSettings
+from .bodies import Body, PhysicsSettings, body_sphere
 from .errors import SceneError
-from .fields import (Color, Record, Vec3, at_least, between, between_open, color_range,
-                     nonnegative, nonzero, param, positive, unit_interval)
+from .fields import (Color, Record, Vec3, at_least, between, between_open, color_range, nonnegative,
+                     nonzero, param, positive, unit_interval)
 from .shapes import Node, primitives
 
 
@@ -220,3 +221,45 @@ class Scene(Record):
             if body.material not in self.materials:
                 raise SceneError(f"unknown material {body.material!r} (defined: {known})",
                                  ("bodies", index, "material"))
+
+
+# --- Bodies in the scene ------------------------------------------------------------------
+
+def scene_objects(scene: Scene, positions=None) -> tuple[Node, ...]:
+    """The objects a renderer draws: the scene's objects, then one sphere per body.
+
+    The bodies come last, so the object id of every static object (its depth-first index)
+    is the same with or without bodies.
+
+    Parameters
+    ----------
+    scene : Scene
+    positions : (N, 3) array_like, optional
+        Centres of the N bodies (default: their positions in the scene).
+    """
+    if positions is None:
+        positions = [None] * len(scene.bodies)
+    elif len(positions) != len(scene.bodies):
+        raise ValueError(f"expected {len(scene.bodies)} positions, got {len(positions)}")
+    return scene.objects + tuple(body_sphere(body, p) for body, p in zip(scene.bodies, positions))
+
+
+def scene_at(scene: Scene, positions) -> Scene:
+    """``scene`` with its bodies moved to ``positions`` ((N, 3), one row per body).
+
+    Only numbers change, so a generated shader's text (and the GPU's compiled program) is
+    the same for every time step.
+    """
+    if len(positions) != len(scene.bodies):
+        raise ValueError(f"expected {len(scene.bodies)} positions, got {len(positions)}")
+    bodies = tuple(dataclasses.replace(body, position=tuple(float(c) for c in p))
+                   for body, p in zip(scene.bodies, positions))
+    return dataclasses.replace(scene, bodies=bodies)
+
+
+def rendered_scene(scene: Scene) -> Scene:
+    """``scene`` with its bodies turned into objects (and none left as bodies), as a renderer
+    wants it; a scene without bodies is returned unchanged."""
+    if not scene.bodies:
+        return scene
+    return dataclasses.replace(scene, objects=scene_objects(scene), bodies=())

@@ -8,7 +8,7 @@ the primitives, so the surface a ray meets first is
 - for a ray that starts inside some solid: where it leaves the union of the intervals that
   overlap the one it is in (marching by |sdf| walks out to that surface too; see march.py).
 
-Everything is computed in the primitive's own frame (`reference_cpu.truth_parts`): the ray is
+Everything is computed in the primitive's own frame (`reference_cpu.truth.parts`): the ray is
 moved there by the inverse similarity, keeping its parameter t, and the normals are turned back.
 """
 
@@ -16,11 +16,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from marchlab.errors import SceneError
-from marchlab.geometry import dot
-from marchlab.shapes import Box, Plane, Sphere
+from scene_model.errors import SceneError
+from scene_model.geometry import dot
+from scene_model.shapes import Box, Plane, Sphere
 
-from .truth_parts import Part
+from .parts import Part
 
 ANALYTIC_KINDS = (Sphere, Box, Plane)
 

@@ -12,8 +12,8 @@ from dataclasses import dataclass
 from typing import ClassVar, Iterator
 
 from .errors import SceneError
-from .fields import (Int3, Record, Vec3, all_positive, nonnegative_vector, nonzero, param,
-                     positive, show)
+from .fields import (Int3, Record, Vec3, all_positive, nonnegative_vector, nonzero, param, positive,
+                     show)
 
 
 class Node(Record):

@@ -1,6 +1,6 @@
 """Scenes to and from TOML files (read with `tomllib`, written with `tomlkit`).
 
-The file mirrors the dataclasses of `marchlab.scene` one table per record (``[physics]`` and
+The file mirrors the dataclasses of `scene_model.scene` one table per record (``[physics]`` and
 ``[[bodies]]`` included), with a ``type`` key where a field can hold several classes (objects,
 lights, background). One shorthand keeps files short: any object table may carry ``position``,
 ``rotation`` and ``scale``, which mean ``translate(rotate(scale(node)))``. Saving writes that
@@ -44,8 +44,8 @@ def _kinds(base) -> dict[str, type]:
 # --- Reading ---------------------------------------------------------------------------------
 
 def bundled_scene_names() -> list[str]:
-    """Names of the scenes shipped in marchlab/scenes/."""
-    folder = resources.files("marchlab") / "scenes"
+    """Names of the scenes shipped in scene_model/scenes/."""
+    folder = resources.files("scene_model") / "scenes"
     return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml"))
 
 
@@ -56,7 +56,7 @@ def scene_path(name_or_path: str | os.PathLike) -> Path:
         return path
     if path.is_dir():
         raise SceneError("is a folder, not a scene file", (), str(name_or_path))
-    bundled = resources.files("marchlab") / "scenes" / f"{name_or_path}.toml"
+    bundled = resources.files("scene_model") / "scenes" / f"{name_or_path}.toml"
     if path.suffix == "" and bundled.is_file():
         return Path(str(bundled))
     names = ", ".join(bundled_scene_names())

@@ -1,6 +1,6 @@
 """Build scenes in Python, for notebooks::
 
-    from marchlab.builder import *
+    from scene_model.builder import *
     floor = plane(material="floor")
     ball = sphere(1, material="red").at(0, 1, 0)
     cut = box(1) - sphere(1.3)
@@ -9,7 +9,7 @@
                   materials={"floor": Material(checker=Checker()), "red": Material(color=(1, 0, 0)),
                              "default": Material()})
 
-Each function returns a node of `marchlab.shapes`; the node's methods ``at``, ``rotate``,
+Each function returns a node of `scene_model.shapes`; the node's methods ``at``, ``rotate``,
 ``scale``, ``repeat``, ``smooth_union``... and the operators ``|``, ``&``, ``-`` combine them.
 """
 
@@ -18,9 +18,9 @@ from __future__ import annotations
 from functools import reduce
 
 from .bodies import Body, PhysicsSettings
-from .scene import (Camera, Checker, DirectionalLight, Fog, Material, PointLight,
-                    RenderSettings, Scene, SkyBackground, SolidBackground, SpotLight)
-from .shapes import (Box, Capsule, CappedCylinder, Cone, Node, Plane, RoundBox, Sphere, Torus)
+from .scene import (Camera, Checker, DirectionalLight, Fog, Material, PointLight, RenderSettings,
+                    Scene, SkyBackground, SolidBackground, SpotLight)
+from .shapes import Box, CappedCylinder, Capsule, Cone, Node, Plane, RoundBox, Sphere, Torus
 
 __all__ = ["sphere", "box", "round_box", "plane", "torus", "capped_cylinder", "capsule", "cone",
            "union", "intersection", "Scene", "Camera", "RenderSettings", "Material", "Checker",

@@ -5,7 +5,7 @@ scaled into a box about 100 units wide, where float32 spacing is fine and Embree
 epsilons are sized for; the distances it finds are scaled back. Embree's geometric normal Ng is
 not unit length and its sign follows the triangle's winding, so it is normalised here and
 turned to agree with the face's outward normal (the meshes are wound outward,
-`reference_cpu.truth_mesh`).
+`reference_cpu.truth.mesh`).
 
 A hit on one part's surface that lies inside another part is not on the surface of the union
 (two overlapping spheres: the ray meets the second sphere's shell inside the first); such a
@@ -16,10 +16,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from marchlab.errors import MarchlabError
-from marchlab.geometry import dot
+from scene_model.errors import MarchlabError
+from scene_model.geometry import dot
 
-from .truth_mesh import Mesh, face_normals
+from .mesh import Mesh, face_normals
 
 SCENE_BOX = 100.0                     # width of the box the scene is scaled into (as trimesh)
 FLOAT32_EPS = float(np.finfo(np.float32).eps)

@@ -28,9 +28,9 @@ import math
 import numpy as np
 
 from .geometry import rotation_matrix
-from .shapes import (Box, Capsule, CappedCylinder, Cone, Intersection, Node, Plane, Repeat,
-                     Rotate, RoundBox, Scale, SmoothIntersection, SmoothSubtraction,
-                     SmoothUnion, Sphere, Subtraction, Torus, Translate, Union)
+from .shapes import (Box, CappedCylinder, Capsule, Cone, Intersection, Node, Plane, Repeat, Rotate,
+                     RoundBox, Scale, SmoothIntersection, SmoothSubtraction, SmoothUnion, Sphere,
+                     Subtraction, Torus, Translate, Union)
 
 # A sphere as (centre (3,) float64 ndarray, radius), or None for an unbounded shape.
 Sphere_ = tuple[np.ndarray, float] | None
