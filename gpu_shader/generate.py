@@ -86,6 +86,38 @@ def generate(scene: Scene, width: int, height: int, dialect: str = "glsl",
     return _Generator(scene, language, flat_rows).program(width, height)
 
 
+@dataclass(frozen=True)
+class ScalarProgram:
+    """The one-ray OpenCL program of a scene before it is wrapped in its dialect: what the
+    packet form is derived from.
+
+    Attributes
+    ----------
+    defines : str
+        The parameter names, ``#define EPSILON P[4].x`` and so on, one per line.
+    functions : str
+        Every function of the program but the entry point, in reading order (section
+        banners included), spelled as the one-ray OpenCL dialect spells them, with ``P``
+        and ``U`` read directly (not yet passed on as arguments).
+    parameters : (N, 4) float64 ndarray
+    features : tuple of str
+    """
+    defines: str
+    functions: str
+    parameters: np.ndarray
+    features: tuple[str, ...]
+
+
+def scalar_program(scene: Scene, width: int, height: int,
+                   precision: str = "float32") -> ScalarProgram:
+    """The one-ray OpenCL program of ``scene``, unwrapped (see `ScalarProgram`)."""
+    generator = _Generator(scene, get_dialect("opencl", precision))
+    parts, _ = generator.sections(width, height)
+    functions = "\n".join(_banner(title) + text for title, text in parts if text)
+    return ScalarProgram(generator.block.defines(), functions,
+                         generator.block.values(np.float64), tuple(sorted(generator.features)))
+
+
 class _Generator:
     def __init__(self, scene: Scene, dialect: Dialect, flat_rows: int = 0):
         self.scene, self.s, self.d = scene, scene.render, dialect
@@ -110,6 +142,22 @@ class _Generator:
         self.lone_shadows = self.paired_lights < lights
 
     def program(self, width: int, height: int) -> Program:
+        parts, fixed = self.sections(width, height)
+        entry = self.d.entry
+        parts.append((f"the entry point (glsl/{entry})", glsl_file(entry)))
+        rows, fixed = max(1, len(self.block.rows)), max(1, fixed)
+        head = [self.d.prelude, _banner("parameters: one vec4 row each, set per frame")
+                + self.d.declare_parameters(rows, fixed, self.flat_rows)]
+        head.append(self.block.defines())
+        head.append(self.d.structs())
+        body = [_banner(title) + text for title, text in parts if text]
+        source = self.d.finish("\n".join(head + body))
+        return Program(source, self.block.values(np.float64), tuple(sorted(self.features)),
+                       self.d.vertex_shader(rows, fixed, self.flat_rows))
+
+    def sections(self, width: int, height: int) -> tuple[list[tuple[str, str]], int]:
+        """The program's functions as (section title, text) pairs in reading order, all but
+        the entry point, and the number of parameter rows read with fixed indices."""
         self.settings_rows(width, height)
         bounds = None
         if self.s.bounding_spheres:
@@ -136,17 +184,7 @@ class _Generator:
         if self.s.shading in LIT_MODES:
             parts.insert(-1, ("materials, indexed by object id", self.material_code()))
         parts.append(("the per-pixel pipeline (reference_cpu/render.py)", self.pixel_code()))
-        entry = self.d.entry
-        parts.append((f"the entry point (glsl/{entry})", glsl_file(entry)))
-        rows, fixed = max(1, len(self.block.rows)), max(1, fixed)
-        head = [self.d.prelude, _banner("parameters: one vec4 row each, set per frame")
-                + self.d.declare_parameters(rows, fixed, self.flat_rows)]
-        head.append(self.block.defines())
-        head.append(self.d.structs())
-        body = [_banner(title) + text for title, text in parts if text]
-        source = self.d.finish("\n".join(head + body))
-        return Program(source, self.block.values(np.float64), tuple(sorted(self.features)),
-                       self.d.vertex_shader(rows, fixed, self.flat_rows))
+        return parts, fixed
 
     def file(self, name: str) -> str:
         """Where the building blocks ``name`` come from, for the program's section titles."""
