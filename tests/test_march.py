@@ -13,6 +13,9 @@ A sphere and a plane have exact SDFs, so the march can be checked against closed
 The step rules of the module docstring are checked on rays whose SDF along the ray is a
 closed-form sequence (head-on plane, oblique plane, ray parallel to a plane, ray leaving a
 sphere radially).
+
+The fast `march` and Hart's loop as the textbook writes it (`textbook_march`) must agree bit
+for bit, on the primary and shadow rays of every bundled scene, in both precisions.
 """
 
 import math
@@ -20,9 +23,14 @@ import math
 import numpy as np
 import pytest
 
-from reference_cpu.march import march
+import marchlab
+from reference_cpu.lights import light_at
+from reference_cpu.march import march, textbook_march
+from reference_cpu.normals import estimate_normal
 from reference_cpu.scene_sdf import build_scene_sdf
 from scene_model.builder import plane, sphere
+from scene_model.camera import camera_rays
+from scene_model.scene import rendered_scene
 
 EPSILON = 1e-3
 CENTRE = np.array([0.3, -0.2, 0.5])
@@ -249,3 +257,39 @@ def test_float32_march_returns_float32_t_within_float32_tolerance_of_float64():
     cos_theta = np.abs(np.einsum("ij,ij->i", normal, directions[clear][h]))
     # The float64 bound plus float32 rounding of t ~ 6 (a few ulps of 2^-21).
     assert np.all(np.abs(t_exact[clear][h] - t[h]) <= EPSILON / cos_theta + 1e-5)
+
+
+def scene_rays(name, dtype, width=40, height=30):
+    """A bundled scene's SDF and settings, and its primary and shadow rays, as the renderer
+    makes them: the shadow rays start at the primary hits pushed out along the normal and run
+    toward every light, each no farther than its light (a per-ray max_distance)."""
+    scene = marchlab.load_scene(name)
+    r = scene.render
+    sdf = build_scene_sdf(rendered_scene(scene).objects, dtype)
+    origin, directions = camera_rays(scene.camera, width, height, dtype)
+    primary = (origin, directions.reshape(-1, 3), sdf, r.max_steps, r.epsilon, r.max_distance)
+    t, _, hit = textbook_march(*primary)
+    p = origin + t[hit, None] * primary[1][hit]
+    normal = estimate_normal(sdf, p, dtype.type(r.normal_step), r.normal_method)
+    start = p + dtype.type(r.surface_offset) * normal
+    lights = [light_at(light, start) for light in scene.lights]
+    to_light = np.concatenate([to_light for to_light, _, _ in lights])
+    limit = np.minimum(np.concatenate([distance for _, distance, _ in lights]),
+                       dtype.type(r.max_distance))
+    shadow = (np.tile(start, (len(lights), 1)), to_light, sdf, r.max_steps, r.epsilon, limit)
+    return primary, shadow
+
+
+@pytest.mark.parametrize("precision", ["float64", "float32"])
+@pytest.mark.parametrize("name", marchlab.bundled_scene_names())
+def test_fast_march_is_bit_identical_to_the_textbook_march_on_every_bundled_scene(name,
+                                                                                 precision):
+    for rays in scene_rays(name, np.dtype(precision)):
+        expected = textbook_march(*rays)
+        got = march(*rays)
+        for output, a, b in zip(("t", "steps", "hit"), got, expected):
+            np.testing.assert_array_equal(a, b, err_msg=output, strict=True)   # dtype too
+        t, steps, hit = expected
+        # Both kinds of ray end both ways, so every rule of the loop took part.
+        assert hit.any() and not hit.all()
+        assert len(np.unique(steps)) > 5

@@ -4,7 +4,8 @@
 ``marchlab.check.sdf_torus(sdf_torus)`` whichever module holds the check:
 
 - `marchlab.check.sdf`: the primitives' signed distance functions (lesson 01);
-- `marchlab.check.marching`: the sphere tracer itself, ``march`` (lesson 01);
+- `marchlab.check.marching`: how many steps the march takes to a floor, ``steps_to_floor``
+  (lesson 01);
 - `marchlab.check.operators`: CSG, smooth blends and transforms (lesson 02);
 - `marchlab.check.shading`: ``reflect``, Lambert, Phong, Blinn-Phong, attenuation (lessons 03
   and 05);

@@ -14,10 +14,11 @@ passed.
 
 The topic modules (`marchlab.check.sdf`, `marchlab.check.operators`, `marchlab.check.shading`,
 `marchlab.check.marching`, `marchlab.check.shadows`) only say what to try: the inputs of each
-exercise and its known mistakes. They hand them to ``_compare`` here, which runs both
-functions and writes the verdict; ``march``, which returns three arrays, builds its verdict
-from the smaller pieces. The random inputs and the test scene that several topics use are
-here too. Names with a leading underscore are the checks' own machinery, not for students.
+exercise and its known mistakes. They hand them to `compare` here, which runs both functions
+and writes the verdict. What several topics share is public: `compare`, the sizes `CASES` and
+`SAMPLES`, the random inputs `random_points` and `unit_vectors`, and the scene shadow rays are
+checked in, `sample_scene_sdf`. Names with a leading underscore are the verdict's own
+machinery, used only here.
 """
 
 from __future__ import annotations
@@ -161,7 +162,7 @@ def _bad(err):
     return bad.reshape(len(bad), -1).any(axis=1) if bad.ndim > 1 else bad
 
 
-def _compare(name, student, reference, cases, mistakes=(), distance=False) -> CheckResult:
+def compare(name, student, reference, cases, mistakes=(), distance=False) -> CheckResult:
     """Run ``student`` and ``reference`` on every case (a tuple of arguments) and judge.
 
     ``mistakes`` are ``(function, hint)`` pairs: wrong versions a student might write, with
@@ -262,17 +263,18 @@ def _diagnose(results, bad, distance) -> str | None:
 
 # --- Inputs that several topics use ------------------------------------------------------------
 
-def _points(rng, size, n=SAMPLES):
+def random_points(rng, size, n=SAMPLES):
     """(n, 3) points: half near a shape of the given size, half farther out."""
     spread = np.where(np.arange(n) % 2 == 0, 1.2, 3.0)[:, None] * size
     return rng.uniform(-1, 1, (n, 3)) * spread
 
 
-def _units(rng, n=SAMPLES):
+def unit_vectors(rng, n=SAMPLES):
+    """(n, 3) random unit vectors, uniform over the directions."""
     return normalize(rng.normal(size=(n, 3)))
 
 
-def _test_scene_sdf():
-    """The floor y = 0, a sphere hanging over it and a box standing on it."""
+def sample_scene_sdf():
+    """The SDF of a small scene: the floor y = 0, a sphere hanging over it, a box standing on it."""
     return build_scene_sdf([Plane(), Translate(Sphere(0.6), (0.0, 1.2, 0.0)),
                             Translate(Box((0.4, 0.4, 0.4)), (1.5, 0.4, 0.5))])

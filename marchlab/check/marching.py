@@ -1,113 +1,107 @@
-"""Check for lesson 01's sphere tracer, ``march``: where each ray stops and after how many steps.
+"""Check for lesson 01's exercise on the march: how many steps does a ray take to a floor?
 
-``march`` returns three arrays, ``(t, steps, hit)``, so its check is written out here rather
-than handed to the shared comparison: it traces rays through a small test scene (a floor, a
-sphere and a box) with `reference_cpu.march.march` and the student's function, and asks hits
-and step counts to agree exactly and t within the tolerance of `marchlab.check.judge`. Rays
-from a camera, rays starting inside a solid, a low step limit and a short maximum distance
-each test one rule of the loop.
+The lesson shows the loop itself (`reference_cpu.march.textbook_march`); the exercise asks
+what it does. A ray starts at height h above the floor y = 0 and heads down at an angle a to
+it. The floor is a plane, so every step moves the ray down by d sin a, and the distances form a
+geometric sequence: d_i = h (1 - sin a)^(i - 1). The student turns that and the loop's rules
+(``steps`` counts every evaluation, a hit needs d_i < epsilon, no ray takes more than
+max_steps) into a formula. The check marches the same rays with `textbook_march` and asks for
+the same step counts exactly; how it compares and reports is in `marchlab.check.judge`.
 """
 
 from __future__ import annotations
 
-import copy
 from typing import Callable
 
 import numpy as np
 
-from reference_cpu import march as M
-from scene_model.geometry import normalize
+from reference_cpu.march import textbook_march
+from reference_cpu.scene_sdf import build_scene_sdf
+from scene_model.shapes import Plane
 
-from .judge import SAMPLES, TOLERANCE, _bad, _call, _errors, _fmt, _test_scene_sdf, _units, _verdict
+from .judge import CASES, SAMPLES, compare
 from .result import CheckResult
 
-__all__ = ["march"]
+__all__ = ["steps_to_floor"]
 
 
-def march(student: Callable, seed: int = 0) -> CheckResult:
-    """Check ``student(origins, directions, sdf, max_steps, epsilon, max_distance)``.
+def marched_steps(height, angle, epsilon, max_steps):
+    """The ``steps`` of `textbook_march` from (0, h, 0) along (cos a, -sin a, 0) to the floor.
 
-    It must return ``(t, steps, hit)`` as `reference_cpu.march.march` does: t (N,) (inf on a
-    miss), steps (N,) int, hit (N,) bool. ``sdf(p)`` returns a tuple whose first item is the
-    distance (N,). Rays and hits must agree exactly; t within the tolerance.
+    Parameters
+    ----------
+    height : (N,) ndarray
+        Start heights above the floor y = 0.
+    angle : (N,) ndarray
+        Angles between the rays and the floor, radians.
+    epsilon : float
+    max_steps : int
+
+    Returns
+    -------
+    (N,) int32 ndarray
+    """
+    zero = np.zeros_like(height)
+    origins = np.column_stack([zero, height, zero])
+    directions = np.column_stack([np.cos(angle), -np.sin(angle), zero])
+    floor = build_scene_sdf([Plane()])
+    return textbook_march(origins, directions, floor, max_steps, epsilon, np.inf)[1]
+
+
+def _counted(height, angle, epsilon, max_steps, fraction_left=lambda a: 1 - np.sin(a),
+             first=2, within_epsilon=True, limited=True):
+    """The step count from the geometric sequence, with switches for the classic mistakes.
+
+    The first i with h q^(i - 1) < epsilon is floor(log(epsilon / h) / log q) + 2 (q < 1),
+    except that a ray starting within epsilon hits at its first evaluation.
+    """
+    with np.errstate(divide="ignore"):
+        steps = np.floor(np.log(epsilon / height) / np.log(fraction_left(angle))) + first
+    if within_epsilon:
+        steps = np.where(height < epsilon, 1, steps)
+    return np.minimum(steps, max_steps) if limited else steps
+
+
+def _rays(rng, epsilon):
+    """SAMPLES start heights (one in eight already within epsilon) and angles, 2 to 89 degrees,
+    none so close to a step boundary that rounding could move the count by one."""
+    height = np.where(np.arange(SAMPLES) % 8 == 7, rng.uniform(0.05, 0.95, SAMPLES) * epsilon,
+                      rng.uniform(0.2, 5.0, SAMPLES))
+    angle = np.radians(rng.uniform(2.0, 89.0, SAMPLES))
+    ratio = np.log(epsilon / height) / np.log(1 - np.sin(angle))
+    clear = np.abs(ratio - np.round(ratio)) > 1e-6
+    return height[clear], angle[clear]
+
+
+def steps_to_floor(student: Callable, seed: int = 0) -> CheckResult:
+    """Check ``student(height, angle, epsilon, max_steps)`` -> (N,) step counts.
+
+    ``height`` (N,) are start heights above the floor y = 0, ``angle`` (N,) the angles
+    between the rays and the floor in radians (0 grazing, pi/2 straight down); ``epsilon``
+    and ``max_steps`` are the march's settings. The answer must be the ``steps`` that
+    `reference_cpu.march.textbook_march` returns for those rays (`marched_steps`), exactly.
     """
     rng = np.random.default_rng(seed)
-    sdf = _test_scene_sdf()
-    eye = np.array([0.0, 1.5, 6.0])
-    targets = rng.uniform([-3, -0.5, -3], [3, 3, 3], (2 * SAMPLES, 3))
-    toward = normalize(targets - eye)
-    inside = np.array([0.0, 1.2, 0.0]) + 0.3 * _units(rng, SAMPLES)     # inside the sphere
-    cases = [("rays from a camera", (eye, toward, sdf, 128, 1e-3, 40.0)),
-             ("rays starting inside the sphere", (inside, _units(rng), sdf, 128, 1e-3, 40.0)),
-             ("a low max_steps of 6", (eye, toward, sdf, 6, 1e-3, 40.0)),
-             ("a short max_distance of 6", (eye, toward, sdf, 128, 1e-3, 6.0))]
-    samples, max_error = 0, 0.0
-    for label, case in cases:
-        t, steps, hit = M.march(*copy.deepcopy(case))
-        got, problem = _call(student, copy.deepcopy(case))
-        n = len(t)
-        if problem is None:
-            got, problem = _march_result(got, n)
-        if problem is not None:
-            where = "" if "NotImplementedError" in problem else f" (Test: {label}.)"
-            return _verdict("march", False, problem + where)
-        g_t, g_steps, g_hit = got
-        samples += n
-        wrong_hit, wrong_steps = g_hit != hit, g_steps != steps
-        errors = _errors(g_t, t)
-        max_error = max(max_error, float(np.max(errors, initial=0.0, where=np.isfinite(errors))))
-        bad = wrong_hit | wrong_steps | _bad(errors)
-        if not bad.any():
-            continue
-        i = int(np.argmax(bad))
-        ray = f"the ray from {_fmt(np.broadcast_to(case[0], (n, 3))[i])} along {_fmt(case[1][i])}"
-        where = (f"With {label}, {ray} should give hit={bool(hit[i])}, steps={steps[i]}, "
-                 f"t={_fmt(t[i])}; yours gave hit={bool(g_hit[i])}, steps={g_steps[i]}, "
-                 f"t={_fmt(g_t[i])} ({int(bad.sum())} of {n} rays differ).")
-        cause = _march_cause(label, t, steps, hit, g_t, g_steps, g_hit)
-        return _verdict("march", False, where + (f" Likely cause: {cause}" if cause else ""),
-                        samples, max_error)
-    tests = ", ".join(label for label, _ in cases)
-    return _verdict("march", True, f"Your t, steps and hit agree with marchlab's march on "
-                    f"{samples} rays ({len(cases)} tests: {tests}); t within "
-                    f"{TOLERANCE:g}·(1 + t).", samples, max_error)
-
-
-def _march_result(got, n):
-    """The student's (t, steps, hit) as arrays of length n, or why they are not."""
-    if not isinstance(got, (tuple, list)) or len(got) != 3:
-        return None, ("your march must return three arrays (t, steps, hit); it returned "
-                      f"{type(got).__name__}" + (f" of length {len(got)}" if
-                                                  isinstance(got, (tuple, list)) else "") + ".")
-    arrays = []
-    for name, value, dtype in zip(("t", "steps", "hit"), got, (np.float64, np.int64, bool)):
-        try:
-            a = np.asarray(value).astype(dtype)
-        except (TypeError, ValueError):
-            return None, f"`{name}` is not an array of numbers."
-        if a.shape != (n,):
-            return None, f"`{name}` has shape {a.shape}; expected ({n},), one value per ray."
-        arrays.append(a)
-    return arrays, None
-
-
-def _march_cause(label, t, steps, hit, g_t, g_steps, g_hit) -> str | None:
-    """A guess at what is wrong with a student's march, from how its results differ."""
-    if np.isfinite(g_t[~g_hit]).any():
-        return "a ray that misses must have t = inf (np.inf), whatever distance it reached."
-    if label.startswith("rays starting inside") and (g_hit & (g_steps == 1) & (steps > 1)).any():
-        return ("inside a solid the SDF is negative, which is already < epsilon: compare and "
-                "step with |sdf|, the absolute value.")
-    same_hits = np.array_equal(hit, g_hit)
-    if same_hits and np.all(g_steps - steps == g_steps[0] - steps[0]):
-        return (f"your step counts are off by {int(g_steps[0] - steps[0]):+d} on every ray: "
-                "steps counts SDF evaluations, the one that found the hit included.")
-    if label.startswith("a short") and (g_hit & ~hit).any():
-        return ("a ray misses as soon as t > max_distance: check t after each step, before "
-                "the next evaluation.")
-    if label.startswith("a low") and (g_hit != hit).any():
-        return "after max_steps evaluations without a hit the ray misses; count them from 1."
-    if same_hits and np.array_equal(g_steps, steps):
-        return ("t is wrong where the rays hit: it should be the distance travelled when "
-                "|sdf| first dropped below epsilon (before adding that last distance).")
-    return None
+    cases = []
+    for j in range(CASES):
+        epsilon = float(10 ** rng.uniform(-4, -2))
+        max_steps = 1000 if j % 2 == 0 else int(rng.integers(4, 40))   # half cut rays short
+        cases.append((*_rays(rng, epsilon), epsilon, max_steps))
+    mistakes = [
+        (lambda *a: _counted(*a, first=1), "steps counts every SDF evaluation, the last one "
+         "too: the ray that reaches d < epsilon at evaluation i took i steps, and d_i is "
+         "h (1 − sin a)^(i − 1)."),
+        (lambda *a: _counted(*a, first=3), "one step too many: the first evaluation, at "
+         "t = 0, already counts as step 1, and d_1 = h."),
+        (lambda *a: _counted(*a, fraction_left=lambda a: 1 - np.cos(a)), "the angle is "
+         "measured from the floor, not from its normal: a step of length d comes down by "
+         "d sin a, leaving the fraction 1 − sin a of the height."),
+        (lambda *a: _counted(*a, limited=False), "a ray that has not arrived after max_steps "
+         "evaluations stops there: steps is never more than max_steps."),
+        (lambda *a: _counted(*a, within_epsilon=False), "a ray that starts within epsilon of "
+         "the floor hits at its first evaluation: steps is 1 where height < epsilon."),
+        (lambda h, a, eps, n: np.minimum(np.ceil(np.log(h / eps) / np.sin(a)), n),
+         "ln(h / epsilon) / sin a is the estimate for small angles (ln q ≈ −sin a); count "
+         "exactly with the logarithm of q = 1 − sin a."),
+    ]
+    return compare("steps_to_floor", student, marched_steps, cases, mistakes)

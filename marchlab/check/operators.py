@@ -16,7 +16,7 @@ import numpy as np
 from reference_cpu import sdf as S
 from scene_model.geometry import rotation_matrix
 
-from .judge import CASES, SAMPLES, _compare, _points
+from .judge import CASES, SAMPLES, compare, random_points
 from .result import CheckResult
 
 __all__ = ["op_union", "op_intersection", "op_subtraction", "op_smooth_union",
@@ -46,15 +46,15 @@ def op_union(student: Callable, seed: int = 0) -> CheckResult:
     """Check ``student(d1, d2)`` (two (N,) distances) -> (N,)."""
     mistakes = [(lambda a, b: np.maximum(a, b), "that is the intersection: a union keeps the "
                  "nearer surface, min(d1, d2).")]
-    return _compare("op_union", student, S.op_union, _pairs(seed, False), mistakes, True)
+    return compare("op_union", student, S.op_union, _pairs(seed, False), mistakes, True)
 
 
 def op_intersection(student: Callable, seed: int = 0) -> CheckResult:
     """Check ``student(d1, d2)`` -> (N,)."""
     mistakes = [(lambda a, b: np.minimum(a, b), "that is the union: an intersection keeps the "
                  "farther surface, max(d1, d2).")]
-    return _compare("op_intersection", student, S.op_intersection, _pairs(seed, False),
-                    mistakes, True)
+    return compare("op_intersection", student, S.op_intersection, _pairs(seed, False),
+                   mistakes, True)
 
 
 def op_subtraction(student: Callable, seed: int = 0) -> CheckResult:
@@ -67,8 +67,8 @@ def op_subtraction(student: Callable, seed: int = 0) -> CheckResult:
         (lambda a, b: a - b, "distances do not subtract: 'inside 1 and outside 2' is "
          "max(d1, −d2)."),
     ]
-    return _compare("op_subtraction", student, S.op_subtraction, _pairs(seed, False),
-                    mistakes, True)
+    return compare("op_subtraction", student, S.op_subtraction, _pairs(seed, False),
+                   mistakes, True)
 
 
 # The blend factor h of each smooth operator before clamping, and the sign of its k h (1 - h)
@@ -111,8 +111,8 @@ def op_smooth_union(student: Callable, seed: int = 0) -> CheckResult:
     mistakes = _smooth_mistakes(S.op_smooth_union, S.op_union, lambda a, b: a) + [
         (h_backwards, "h is backwards: h = 1 should select d1, so the mix is d2 + (d1 − d2)·h, "
          "i.e. mix(d2, d1, h).")]
-    return _compare("op_smooth_union", student, S.op_smooth_union, _pairs(seed, True),
-                    mistakes, True)
+    return compare("op_smooth_union", student, S.op_smooth_union, _pairs(seed, True),
+                   mistakes, True)
 
 
 smooth_union = op_smooth_union
@@ -120,18 +120,18 @@ smooth_union = op_smooth_union
 
 def op_smooth_intersection(student: Callable, seed: int = 0) -> CheckResult:
     """Check ``student(d1, d2, k)`` -> (N,)."""
-    return _compare("op_smooth_intersection", student, S.op_smooth_intersection,
-                    _pairs(seed, True),
-                    _smooth_mistakes(S.op_smooth_intersection, S.op_intersection,
-                                     lambda a, b: a), True)
+    return compare("op_smooth_intersection", student, S.op_smooth_intersection,
+                   _pairs(seed, True),
+                   _smooth_mistakes(S.op_smooth_intersection, S.op_intersection,
+                                    lambda a, b: a), True)
 
 
 def op_smooth_subtraction(student: Callable, seed: int = 0) -> CheckResult:
     """Check ``student(d1, d2, k)`` (shape 1 minus shape 2, rounded) -> (N,)."""
-    return _compare("op_smooth_subtraction", student, S.op_smooth_subtraction,
-                    _pairs(seed, True),
-                    _smooth_mistakes(S.op_smooth_subtraction, S.op_subtraction,
-                                     lambda a, b: -b), True)
+    return compare("op_smooth_subtraction", student, S.op_smooth_subtraction,
+                   _pairs(seed, True),
+                   _smooth_mistakes(S.op_smooth_subtraction, S.op_subtraction,
+                                    lambda a, b: -b), True)
 
 
 # --- Transforms (they move the query point) ----------------------------------------------------
@@ -139,29 +139,29 @@ def op_smooth_subtraction(student: Callable, seed: int = 0) -> CheckResult:
 def op_translate(student: Callable, seed: int = 0) -> CheckResult:
     """Check ``student(p, offset)`` -> (N, 3), the query point of a moved shape."""
     rng = np.random.default_rng(seed)
-    cases = [(_points(rng, 2.0), rng.uniform(-2, 2, 3)) for _ in range(CASES)]
+    cases = [(random_points(rng, 2.0), rng.uniform(-2, 2, 3)) for _ in range(CASES)]
     mistakes = [(lambda p, o: p + o, "a transform moves the query point the opposite way: "
                  "to move the shape by offset, evaluate it at p − offset.")]
-    return _compare("op_translate", student, S.op_translate, cases, mistakes)
+    return compare("op_translate", student, S.op_translate, cases, mistakes)
 
 
 def op_rotate(student: Callable, seed: int = 0) -> CheckResult:
     """Check ``student(p, matrix)`` (matrix : (3, 3) rotation R) -> (N, 3), R^T p per point."""
     rng = np.random.default_rng(seed)
-    cases = [(_points(rng, 2.0), rotation_matrix(rng.uniform(-180, 180, 3)))
+    cases = [(random_points(rng, 2.0), rotation_matrix(rng.uniform(-180, 180, 3)))
              for _ in range(CASES)]
     mistakes = [(lambda p, m: p @ m.T, "you rotated the point by R; the query point turns the "
                  "other way, by R⁻¹ = Rᵀ (p @ R in NumPy's row-vector form).")]
-    return _compare("op_rotate", student, S.op_rotate, cases, mistakes)
+    return compare("op_rotate", student, S.op_rotate, cases, mistakes)
 
 
 def op_scale(student: Callable, seed: int = 0) -> CheckResult:
     """Check ``student(p, factor)`` -> (N, 3), the query point of a shape scaled by factor."""
     rng = np.random.default_rng(seed)
-    cases = [(_points(rng, 2.0), rng.uniform(0.3, 3.0)) for _ in range(CASES)]
+    cases = [(random_points(rng, 2.0), rng.uniform(0.3, 3.0)) for _ in range(CASES)]
     mistakes = [(lambda p, s: p * s, "to make the shape s times larger, shrink the query "
                  "point: p / s (and multiply the distance back by s afterwards).")]
-    return _compare("op_scale", student, S.op_scale, cases, mistakes)
+    return compare("op_scale", student, S.op_scale, cases, mistakes)
 
 
 def op_repeat(student: Callable, seed: int = 0) -> CheckResult:
@@ -171,7 +171,7 @@ def op_repeat(student: Callable, seed: int = 0) -> CheckResult:
     for j in range(CASES):
         period = rng.uniform(0.5, 2.0, 3)
         period[j % 3] = 0.0 if j >= 4 else period[j % 3]     # half the cases leave an axis alone
-        cases.append((_points(rng, 4.0), period))
+        cases.append((random_points(rng, 4.0), period))
     safe = lambda c: np.where(c > 0, c, 1)
     zero_axes = ("; and an axis whose period is 0 is not repeated: leave that coordinate as it "
                  "is, np.where(period > 0, ..., p), instead of dividing by 0")
@@ -186,4 +186,4 @@ def op_repeat(student: Callable, seed: int = 0) -> CheckResult:
         (lambda p, c: p - c * np.floor(p / c + 0.5), "the cells are right" + zero_axes + "."),
         (lambda p, c: p - c * np.round(p / c), "the cells are right" + zero_axes + "."),
     ]
-    return _compare("op_repeat", student, S.op_repeat, cases, mistakes)
+    return compare("op_repeat", student, S.op_repeat, cases, mistakes)

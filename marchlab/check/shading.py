@@ -17,7 +17,7 @@ from reference_cpu import shading as SH
 from reference_cpu.lights import attenuation as _attenuation
 from scene_model.geometry import dot, normalize
 
-from .judge import CASES, SAMPLES, _compare, _points, _units
+from .judge import CASES, SAMPLES, compare, random_points, unit_vectors
 from .result import CheckResult
 
 __all__ = ["reflect", "diffuse", "specular_phong", "specular_blinn_phong", "phong",
@@ -26,17 +26,17 @@ __all__ = ["reflect", "diffuse", "specular_phong", "specular_blinn_phong", "phon
 
 def _lighting_vectors(rng, n=SAMPLES):
     """Unit n, l, v with v near the mirror direction of the light half the time."""
-    normal, to_light = _units(rng, n), _units(rng, n)
+    normal, to_light = unit_vectors(rng, n), unit_vectors(rng, n)
     mirror = SH.reflect(-to_light, normal)
     near = normalize(mirror + 0.3 * rng.normal(size=(n, 3)))
-    view = np.where((np.arange(n) % 2 == 0)[:, None], near, _units(rng, n))
+    view = np.where((np.arange(n) % 2 == 0)[:, None], near, unit_vectors(rng, n))
     return normal, to_light, view
 
 
 def reflect(student: Callable, seed: int = 0) -> CheckResult:
     """Check ``student(d, n)`` (d, n : (N, 3), n unit) -> (N, 3), the mirror direction."""
     rng = np.random.default_rng(seed)
-    cases = [(_units(rng) * rng.uniform(0.5, 2), _units(rng)) for _ in range(CASES)]
+    cases = [(unit_vectors(rng) * rng.uniform(0.5, 2), unit_vectors(rng)) for _ in range(CASES)]
     mistakes = [
         (lambda d, n: d + 2 * dot(d, n)[:, None] * n, "the sign: subtract 2(d·n)n."),
         (lambda d, n: d - dot(d, n)[:, None] * n, "the factor 2 is missing: d − (d·n)n only "
@@ -44,18 +44,18 @@ def reflect(student: Callable, seed: int = 0) -> CheckResult:
         (lambda d, n: 2 * dot(d, n)[:, None] * n - d, "that is −reflect(d, n): the result "
          "points back the way it came."),
     ]
-    return _compare("reflect", student, SH.reflect, cases, mistakes)
+    return compare("reflect", student, SH.reflect, cases, mistakes)
 
 
 def diffuse(student: Callable, seed: int = 0) -> CheckResult:
     """Check ``student(n, l)`` (unit (N, 3)) -> (N,), Lambert's max(N·L, 0)."""
     rng = np.random.default_rng(seed)
-    cases = [(_units(rng), _units(rng)) for _ in range(CASES)]
+    cases = [(unit_vectors(rng), unit_vectors(rng)) for _ in range(CASES)]
     mistakes = [(lambda n, l: dot(n, l), "not clamped: where the light is behind the surface "
                  "N·L < 0, and light cannot be negative; use max(N·L, 0)."),
                 (lambda n, l: np.abs(dot(n, l)), "abs(N·L) lights the back of the surface "
                  "too; use max(N·L, 0).")]
-    return _compare("diffuse", student, SH.diffuse, cases, mistakes)
+    return compare("diffuse", student, SH.diffuse, cases, mistakes)
 
 
 def _specular_cases(seed):
@@ -91,14 +91,14 @@ def _specular_mistakes(model):
 
 def specular_phong(student: Callable, seed: int = 0) -> CheckResult:
     """Check ``student(n, l, v, shininess)`` (unit (N, 3); shininess (N,)) -> (N,)."""
-    return _compare("specular_phong", student, SH.specular_phong, _specular_cases(seed),
-                    _specular_mistakes("phong"))
+    return compare("specular_phong", student, SH.specular_phong, _specular_cases(seed),
+                   _specular_mistakes("phong"))
 
 
 def specular_blinn_phong(student: Callable, seed: int = 0) -> CheckResult:
     """Check ``student(n, l, v, shininess)`` -> (N,), max(N·H, 0)^shininess."""
-    return _compare("specular_blinn_phong", student, SH.specular_blinn_phong,
-                    _specular_cases(seed), _specular_mistakes("blinn"))
+    return compare("specular_blinn_phong", student, SH.specular_blinn_phong,
+                   _specular_cases(seed), _specular_mistakes("blinn"))
 
 
 phong = specular_phong
@@ -112,7 +112,7 @@ def _surfaces(seed):
     for j in range(CASES):
         normal, _, view = _lighting_vectors(rng)
         u = lambda: rng.uniform(0, 1, SAMPLES)
-        s = SH.Surface(position=_points(rng, 2.0), normal=normal, view=view,
+        s = SH.Surface(position=random_points(rng, 2.0), normal=normal, view=view,
                        albedo=rng.uniform(0, 1, (SAMPLES, 3)), ka=u(), kd=u(), ks=u(),
                        shininess=rng.uniform(1, 64, SAMPLES))
         incoming = []
@@ -150,14 +150,14 @@ def shade_phong(student: Callable, seed: int = 0) -> CheckResult:
     ``surface`` is a `reference_cpu.shading.Surface`, ``incoming`` a list of
     ``(to_light (N, 3), radiance (N, 3))`` pairs, one per light, ``ambient`` (3,).
     """
-    return _compare("shade_phong", student, SH.shade_phong, _surfaces(seed),
-                    _shade_mistakes(SH.specular_phong))
+    return compare("shade_phong", student, SH.shade_phong, _surfaces(seed),
+                   _shade_mistakes(SH.specular_phong))
 
 
 def shade_blinn_phong(student: Callable, seed: int = 0) -> CheckResult:
     """Check ``student(surface, incoming, ambient)`` -> (N, 3), with the Blinn highlight."""
-    return _compare("shade_blinn_phong", student, SH.shade_blinn_phong, _surfaces(seed),
-                    _shade_mistakes(SH.specular_blinn_phong))
+    return compare("shade_blinn_phong", student, SH.shade_blinn_phong, _surfaces(seed),
+                   _shade_mistakes(SH.specular_blinn_phong))
 
 
 def attenuation(student: Callable, seed: int = 0) -> CheckResult:
@@ -167,4 +167,4 @@ def attenuation(student: Callable, seed: int = 0) -> CheckResult:
              for _ in range(CASES)]
     mistakes = [(lambda d, c, l, q: c + l * d + q * d * d, "attenuation divides: "
                  "1 / (constant + linear·d + quadratic·d²).")]
-    return _compare("attenuation", student, _attenuation, cases, mistakes)
+    return compare("attenuation", student, _attenuation, cases, mistakes)

@@ -15,7 +15,7 @@ import numpy as np
 from reference_cpu import march as M, sdf as S, shadows as SW
 from scene_model.geometry import normalize
 
-from .judge import SAMPLES, _compare, _test_scene_sdf
+from .judge import SAMPLES, compare, sample_scene_sdf
 from .result import CheckResult
 
 __all__ = ["hard_shadow", "soft_shadow"]
@@ -24,7 +24,7 @@ __all__ = ["hard_shadow", "soft_shadow"]
 def _shadow_cases(seed, with_k):
     """Shadow rays from floor points toward lights above, below the sphere, and at infinity."""
     rng = np.random.default_rng(seed)
-    sdf = _test_scene_sdf()
+    sdf = sample_scene_sdf()
     floor = np.column_stack([rng.uniform(-3, 3, SAMPLES), np.full(SAMPLES, 0.01),
                              rng.uniform(-3, 3, SAMPLES)])
     lights = [rng.uniform([-3, 3, -3], [3, 6, 3]) for _ in range(3)] + [np.array([0, 0.45, 0])]
@@ -52,8 +52,8 @@ def hard_shadow(student: Callable, seed: int = 0) -> CheckResult:
         (lambda *a: 1 - SW.hard_shadow(*a), "1 means the light is visible, 0 that it is "
          "blocked: your values are the other way round."),
     ]
-    return _compare("hard_shadow", student, SW.hard_shadow, _shadow_cases(seed, False),
-                    mistakes)
+    return compare("hard_shadow", student, SW.hard_shadow, _shadow_cases(seed, False),
+                   mistakes)
 
 
 def soft_shadow(student: Callable, seed: int = 0) -> CheckResult:
@@ -81,5 +81,5 @@ def soft_shadow(student: Callable, seed: int = 0) -> CheckResult:
         (lambda *a: SW.hard_shadow(*a[:7]), "these are hard shadows (0 or 1): keep the "
          "smallest k·h/t seen along the ray (march's observe argument gives h and t)."),
     ]
-    return _compare("soft_shadow", student, SW.soft_shadow, _shadow_cases(seed, True),
-                    mistakes)
+    return compare("soft_shadow", student, SW.soft_shadow, _shadow_cases(seed, True),
+                   mistakes)

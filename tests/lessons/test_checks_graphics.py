@@ -15,6 +15,7 @@ import pytest
 
 from marchlab import check
 from marchlab.check import graphics
+from marchlab.check.marching import marched_steps
 from reference_cpu import march as M, sdf as S, shading as SH, shadows as SW
 from reference_cpu.lights import attenuation
 from scene_model.geometry import dot, normalize
@@ -30,7 +31,8 @@ REFERENCES = {
     "op_rotate": S.op_rotate, "op_scale": S.op_scale, "op_repeat": S.op_repeat,
     "reflect": SH.reflect, "diffuse": SH.diffuse, "specular_phong": SH.specular_phong,
     "specular_blinn_phong": SH.specular_blinn_phong, "shade_phong": SH.shade_phong,
-    "shade_blinn_phong": SH.shade_blinn_phong, "attenuation": attenuation, "march": M.march,
+    "shade_blinn_phong": SH.shade_blinn_phong, "attenuation": attenuation,
+    "steps_to_floor": marched_steps,
     "hard_shadow": SW.hard_shadow, "soft_shadow": SW.soft_shadow,
 }
 # marchlab.render is also the name of the render function in marchlab/__init__.py
@@ -50,20 +52,12 @@ def _lit(s, incoming, ambient, specular, tint=False, with_ambient=True):
     return color
 
 
-def _signed_march(origins, directions, sdf, max_steps, epsilon, max_distance):
-    """Sphere tracing that forgets the absolute value: rays inside a solid stop at once."""
-    n = len(directions)
-    t, t_hit = np.zeros(n), np.full(n, np.inf)
-    steps, hit, live = np.full(n, max_steps), np.zeros(n, bool), np.ones(n, bool)
-    for step in range(1, max_steps + 1):
-        d = sdf(origins + t[:, None] * directions)[0]
-        arrived = live & (d < epsilon)
-        t_hit[arrived], steps[arrived], hit[arrived] = t[arrived], step, True
-        t = t + d
-        gone = live & ~arrived & (t > max_distance)
-        steps[gone] = step
-        live &= ~(arrived | gone)
-    return t_hit, steps, hit
+def _steps_to_floor(height, angle, epsilon, max_steps, first=2):
+    """The step count from the distances h (1 - sin a)^(i - 1); ``first=1`` forgets to count
+    the evaluation that finds the hit."""
+    ratio = np.log(epsilon / height) / np.log(1 - np.sin(angle))
+    steps = np.where(height < epsilon, 1, np.floor(ratio) + first)
+    return np.minimum(steps, max_steps)
 
 
 def _soft_shadow_keeping_blocked(sdf, o, l, distance, max_steps, epsilon, far, k):
@@ -109,7 +103,8 @@ WRONG = [
     ("shade_blinn_phong", lambda s, i, a: _lit(s, i, a, SH.specular_blinn_phong,
                                                with_ambient=False), "ambient"),
     ("attenuation", lambda d, c, l, q: c + l * d + q * d * d, "divides"),
-    ("march", _signed_march, "|sdf|"),
+    ("steps_to_floor", lambda *args: _steps_to_floor(*args, first=1),
+     "counts every SDF evaluation, the last one too"),
     ("hard_shadow", lambda *args: 1 - SW.hard_shadow(*args), "other way round"),
     ("soft_shadow", _soft_shadow_keeping_blocked, "set the visibility of blocked rays to 0"),
 ]
@@ -203,18 +198,20 @@ def test_changing_the_input_in_place_is_reported():
     assert not result.passed and "changed its input `p` in place" in flat
 
 
-def test_march_returning_one_array_is_reported():
-    result = run("march", lambda *args: M.march(*args)[0])
-    assert not result.passed and "three arrays (t, steps, hit)" in " ".join(result.message.split())
+@pytest.mark.parametrize("seed", range(6))
+def test_steps_to_floor_follows_the_geometric_sequence_of_distances_for_every_seed(seed):
+    """The textbook march's step counts to a floor are exactly the closed form."""
+    result = check.steps_to_floor(_steps_to_floor, seed=seed)
+    assert result.passed and result.max_error == 0.0 and result.samples > 900
 
 
-def test_march_with_finite_t_on_misses_is_reported():
-    def finite_misses(*args):
-        t, steps, hit = M.march(*args)
-        return np.where(hit, t, 0.0), steps, hit
+def test_steps_to_floor_that_ignores_max_steps_is_told_so():
+    def unlimited(height, angle, epsilon, max_steps):
+        return _steps_to_floor(height, angle, epsilon, np.inf)
 
-    result = run("march", finite_misses)
-    assert not result.passed and "t = inf" in " ".join(result.message.split())
+    result = run("steps_to_floor", unlimited)
+    flat = " ".join(result.message.split())
+    assert not result.passed and "never more than max_steps" in flat
 
 
 def test_first_failing_input_is_quoted_with_expected_and_got():
