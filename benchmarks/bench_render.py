@@ -40,7 +40,7 @@ def render_with(backend: str):
     "opencl one-ray" is the opencl backend's one-ray program (`gpu_shader.opencl.render`
     with packets=False), timed beside the packet program it ships with."""
     if backend == ONE_RAY:
-        from reference_cpu import opencl
+        from gpu_shader import opencl
         return lambda scene, w, h, precision: opencl.render(scene, w, h, precision,
                                                             packets=False)
     return lambda scene, w, h, precision: marchlab.render(scene, w, h, backend=backend,

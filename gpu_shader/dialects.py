@@ -24,10 +24,12 @@ from .library import glsl_file, load_library
 STRUCTS = {
     "Hit": (("real", "t"), ("int", "steps"), ("int", "hit")),
     "LightSample": (("vec3", "to_light"), ("real", "distance"), ("vec3", "radiance")),
-    # What a pixel's trace returns: colour and path label, and the primary ray's march,
-    # normal and object id (the Frame's other buffers).
-    "Pixel": (("vec4", "color_path"), ("Hit", "primary"), ("vec3", "normal"), ("int", "id")),
+    # What a pixel's trace returns: its colour, and the primary ray's march, normal and object
+    # id (the Frame's other buffers).
+    "Pixel": (("vec3", "color"), ("Hit", "primary"), ("vec3", "normal"), ("int", "id")),
 }
+# With path labels, a pixel also carries its label (24 bits, exact in a float).
+PATH_FIELD = ("real", "path")
 
 
 @dataclass(frozen=True)
@@ -56,8 +58,10 @@ class Dialect:
         """A number literal that reads back as exactly ``value`` rounded to `real`."""
         return np.format_float_positional(self.real_dtype.type(value), unique=True, trim="0")
 
-    def structs(self) -> str:
-        return "\n".join(self.struct(name, fields) for name, fields in STRUCTS.items())
+    def structs(self, path_labels: bool = False) -> str:
+        """The struct declarations; with ``path_labels``, a Pixel has a ``path`` field."""
+        structs = dict(STRUCTS, Pixel=STRUCTS["Pixel"] + (PATH_FIELD,) * path_labels)
+        return "\n".join(self.struct(name, fields) for name, fields in structs.items())
 
 
 def _glsl_struct(name: str, fields) -> str:
@@ -184,6 +188,7 @@ typedef {real}4 vec4;
 #define vec2(...) ((vec2)(__VA_ARGS__))
 #define vec3(...) ((vec3)(__VA_ARGS__))
 #define vec4(...) ((vec4)(__VA_ARGS__))
+#define real(x) ((real)(x))
 #define uint(x) ((uint)(x))
 #define int(x) ((int)(x))
 // OpenCL's abs is for integers.

@@ -10,9 +10,15 @@ The program is assembled in the order a reader meets it:
 4. lights of the kinds present, the shading model, checker, fog and background only if used;
 5. ``trace``, the per-pixel pipeline of `reference_cpu.render`, then the entry point.
 
+Building blocks come from the libraries in ``glsl/*.glsl``, function by function
+(`gpu_shader.library`); the pipeline functions (normal, materials, shading over the lights,
+background, heat ramp, ``trace``) from the templates in ``glsl/pipeline/``, filled in for
+the scene. This module decides what goes in and fills in the numbers; it spells no GLSL.
+
 Every number that a frame may change is in the parameter block (`gpu_shader.parameters`), so
 the text depends only on the scene's structure, and a program cache keyed by the text never
-compiles the same structure twice.
+compiles the same structure twice. ``path_labels`` adds the bookkeeping the equivalence
+suite needs (`scene_model.frame.Frame.path`); a program for a student has none of it.
 """
 
 from __future__ import annotations
@@ -32,7 +38,7 @@ from scene_model.scene import DirectionalLight, PointLight, Scene, SpotLight
 from scene_model.shapes import primitives
 
 from .dialects import MAX_FLAT_ROWS, Dialect, dialect as get_dialect
-from .library import glsl_file
+from .library import fill_template
 from .parameters import ParameterBlock
 from .sdf_code import PACKET_TYPES, SCALAR_TYPES, scene_sdf_code
 
@@ -60,21 +66,27 @@ class Program:
     vertex_source : str
         The vertex shader that goes with a GLSL ``source`` when it needs its own (it hands on
         parameter rows as flat varyings); "" for the plain full-screen triangle.
+    path_labels : bool
+        Whether the program writes path labels (`scene_model.frame.Frame.path`).
     """
     source: str
     parameters: np.ndarray
     features: tuple[str, ...]
     vertex_source: str = ""
+    path_labels: bool = False
 
 
 def generate(scene: Scene, width: int, height: int, dialect: str = "glsl",
-             precision: str = "float32", flat_rows: int = MAX_FLAT_ROWS) -> Program:
+             precision: str = "float32", flat_rows: int = MAX_FLAT_ROWS,
+             path_labels: bool = False) -> Program:
     """Generate the program that renders ``scene`` at ``width`` x ``height``.
 
-    ``dialect`` is "glsl" (a fragment shader) or "opencl" (a kernel); ``precision`` the
+    ``dialect`` is "glsl" (a fragment shader), "opencl" (a kernel, one ray per work-item)
+    or "opencl-packets" (a kernel, one packet of rays per work-item); ``precision`` the
     meaning of ``real`` ("float64" only in OpenCL). In GLSL, up to ``flat_rows`` parameter
     rows read with fixed indices reach the fragment shader as flat varyings (the context's
-    GL_MAX_VARYING_VECTORS at most).
+    GL_MAX_VARYING_VECTORS at most). ``path_labels`` makes the program compute each pixel's
+    path label too, for the equivalence suite.
     """
     try:
         language = get_dialect(dialect, precision)
@@ -82,8 +94,8 @@ def generate(scene: Scene, width: int, height: int, dialect: str = "glsl",
         raise MarchlabError(err.args[0]) from None
     if language.packets:
         from .generate_packets import PacketGenerator
-        return PacketGenerator(scene, language).program(width, height)
-    return _Generator(scene, language, flat_rows).program(width, height)
+        return PacketGenerator(scene, language, path_labels=True).program(width, height)
+    return _Generator(scene, language, flat_rows, path_labels).program(width, height)
 
 
 @dataclass(frozen=True)
@@ -101,27 +113,31 @@ class ScalarProgram:
         and ``U`` read directly (not yet passed on as arguments).
     parameters : (N, 4) float64 ndarray
     features : tuple of str
+    path_labels : bool
     """
     defines: str
     functions: str
     parameters: np.ndarray
     features: tuple[str, ...]
+    path_labels: bool = False
 
 
-def scalar_program(scene: Scene, width: int, height: int,
-                   precision: str = "float32") -> ScalarProgram:
+def scalar_program(scene: Scene, width: int, height: int, precision: str = "float32",
+                   path_labels: bool = False) -> ScalarProgram:
     """The one-ray OpenCL program of ``scene``, unwrapped (see `ScalarProgram`)."""
-    generator = _Generator(scene, get_dialect("opencl", precision))
+    generator = _Generator(scene, get_dialect("opencl", precision), path_labels=path_labels)
     parts, _ = generator.sections(width, height)
     functions = "\n".join(_banner(title) + text for title, text in parts if text)
     return ScalarProgram(generator.block.defines(), functions,
-                         generator.block.values(np.float64), tuple(sorted(generator.features)))
+                         generator.block.values(np.float64), tuple(sorted(generator.features)),
+                         path_labels)
 
 
 class _Generator:
-    def __init__(self, scene: Scene, dialect: Dialect, flat_rows: int = 0):
+    def __init__(self, scene: Scene, dialect: Dialect, flat_rows: int = 0,
+                 path_labels: bool = False):
         self.scene, self.s, self.d = scene, scene.render, dialect
-        self.flat_rows = flat_rows
+        self.flat_rows, self.path_labels = flat_rows, path_labels
         self.block = ParameterBlock()
         self.features: set[str] = set()
         self.primitives = list(primitives(scene.objects))
@@ -144,16 +160,17 @@ class _Generator:
     def program(self, width: int, height: int) -> Program:
         parts, fixed = self.sections(width, height)
         entry = self.d.entry
-        parts.append((f"the entry point (glsl/{entry})", glsl_file(entry)))
+        parts.append((f"the entry point (glsl/{entry})",
+                      fill_template(entry, path_labels=self.path_labels)))
         rows, fixed = max(1, len(self.block.rows)), max(1, fixed)
         head = [self.d.prelude, _banner("parameters: one vec4 row each, set per frame")
                 + self.d.declare_parameters(rows, fixed, self.flat_rows)]
         head.append(self.block.defines())
-        head.append(self.d.structs())
+        head.append(self.d.structs(self.path_labels))
         body = [_banner(title) + text for title, text in parts if text]
         source = self.d.finish("\n".join(head + body))
         return Program(source, self.block.values(np.float64), tuple(sorted(self.features)),
-                       self.d.vertex_shader(rows, fixed, self.flat_rows))
+                       self.d.vertex_shader(rows, fixed, self.flat_rows), self.path_labels)
 
     def sections(self, width: int, height: int) -> tuple[list[tuple[str, str]], int]:
         """The program's functions as (section title, text) pairs in reading order, all but
@@ -166,29 +183,34 @@ class _Generator:
         sdf_source, sdf_used = scene_sdf_code(self.scene.objects, self.block, bounds,
                                               self.types)
         self.features |= sdf_used
+        culling = self.d.library("culling").select(["ray_meets_sphere"]) if bounds else ""
         parts = [
             (f"the SDF building blocks used by this scene ({self.file('sdf')})",
              self.d.library("sdf").select(sdf_used)),
-            (f"bounding spheres ({self.file('culling')})",
-             self.d.library("culling").select(["ray_meets_sphere"]) if bounds is not None else ""),
+            (f"bounding spheres ({self.file('culling')})", culling),
             ("the scene's SDF tree", sdf_source),
-            (f"the camera ({self.file('camera')})", self.d.library("camera").select(["camera_ray"])),
+            (f"the camera ({self.file('camera')})",
+             self.d.library("camera").select(["camera_ray"])),
         ]
         parts += self.march_parts()
-        parts += [
-            ("surface normals", self.normal_code()),
-        ]
+        parts.append(("surface normals (glsl/pipeline/normals.glsl)", self.normal_code()))
         parts += self.shading_parts()
         # Materials are read by object id; their rows come last, outside the private copy.
         fixed = len(self.block.rows)
         if self.s.shading in LIT_MODES:
-            parts.insert(-1, ("materials, indexed by object id", self.material_code()))
-        parts.append(("the per-pixel pipeline (reference_cpu/render.py)", self.pixel_code()))
+            parts.insert(-1, ("materials, indexed by object id (glsl/pipeline/materials.glsl)",
+                              self.material_code()))
+        parts.append(("the per-pixel pipeline (glsl/pipeline/trace.glsl)", self.pixel_code()))
         return parts, fixed
 
     def file(self, name: str) -> str:
         """Where the building blocks ``name`` come from, for the program's section titles."""
         return self.d.library(name).file
+
+    def template(self, name: str, **context) -> str:
+        """``glsl/pipeline/<name>.glsl`` filled in for this program."""
+        return fill_template(f"pipeline/{name}.glsl", path_labels=self.path_labels,
+                             mode=self.s.shading, **context)
 
     # --- parameters that every program has --------------------------------------------------
 
@@ -237,19 +259,11 @@ class _Generator:
                  self.d.library("march").select(needs[1:], provided={"march"}))]
 
     def normal_code(self) -> str:
-        """``estimate_normal`` written out for the chosen stencil (`reference_cpu.normals`)."""
+        """``estimate_normal`` for the chosen stencil (`reference_cpu.normals`)."""
         method = self.s.normal_method
         self.features.add(f"normals:{method}")
-        lines = [f"// Normal by finite differences, the {method!r} stencil of reference_cpu/normals.py:",
-                 "// n = normalize(sum_k k scene_sdf(p + h k)); zero where the gradient vanishes.",
-                 "vec3 estimate_normal(vec3 p)", "{", "    real h = NORMAL_STEP;",
-                 "    vec3 g = vec3(0.0);"]
-        for k in STENCILS[method]:
-            k = ", ".join(self.d.literal(c) for c in k)
-            lines.append(f"    g = g + scene_sdf(p + h * vec3({k})) * vec3({k});")
-        lines += ["    real size = sqrt(dot(g, g));",
-                  "    return size > 0.0 ? g / size : vec3(0.0);", "}", ""]
-        return "\n".join(lines)
+        stencil = [", ".join(self.d.literal(c) for c in k) for k in STENCILS[method]]
+        return self.template("normals", method=repr(method), stencil=stencil)
 
     # --- lights, materials and shading --------------------------------------------------------
 
@@ -257,19 +271,18 @@ class _Generator:
         mode = self.s.shading
         self.features.add(f"shading:{mode}")
         shading_lib = self.d.library("shading")
-        background = self.background_code()
-        if mode == "normals":
-            return [(f"shading ({self.file('shading')})", shading_lib.select(["shade_normals", "path_step"] + background[1])),
-                    ("the background", background[0])]
-        if mode == "depth":
-            return [(f"shading ({self.file('shading')})", shading_lib.select(["shade_depth", "path_step"] + background[1])),
-                    ("the background", background[0])]
+        background, background_needs = self.background_code()
+        path = ["path_step"] * self.path_labels
+        if mode in ("normals", "depth"):
+            return [(f"shading ({self.file('shading')})",
+                     shading_lib.select([f"shade_{mode}"] + path + background_needs)),
+                    ("the background (glsl/pipeline/background.glsl)", background)]
         if mode == "steps":
-            return [(f"the path label ({self.file('shading')})", shading_lib.select(["path_step"])),
-                    ("the heat colour map (scene_model/colormaps.py)", self.heat_code())]
+            return [(f"the path label ({self.file('shading')})", shading_lib.select(path)),
+                    ("the heat colour map (glsl/pipeline/heat.glsl)", self.heat_code())]
         light_source, light_needs = self.light_code()
-        wanted = ["diffuse", SPECULAR[mode]] + background[1]
-        wanted += ["toon_band"] * (mode == "toon") + ["checker"] * self.checker + ["path_step"]
+        wanted = ["diffuse", SPECULAR[mode]] + background_needs + path
+        wanted += ["toon_band"] * (mode == "toon") + ["checker"] * self.checker
         wanted += ["apply_fog"] * self.fog
         pairs = ([(f"shadow rays toward two lights at once ({self.file('shadow_pair')})",
                    self.d.library("shadow_pair").select(["hard_shadow_pair"]))]
@@ -277,12 +290,13 @@ class _Generator:
         return [
             (f"lights ({self.file('lights')})", self.d.library("lights").select(light_needs)),
             (f"shading ({self.file('shading')})", shading_lib.select(wanted)),
-            ("the background", background[0]),
-        ] + pairs + [(f"the {mode} model over the scene's lights", light_source)]
+            ("the background (glsl/pipeline/background.glsl)", background),
+        ] + pairs + [(f"the {mode} model over the scene's lights (glsl/pipeline/shade.glsl)",
+                      light_source)]
 
     def material_rows(self) -> tuple[int, int, str]:
-        """Append each object's material rows; return the first row, the rows per object
-        and a comment saying what the rows hold."""
+        """Append each object's material rows; return the first row, the rows per object and
+        a comment saying what the rows hold (for the packet program's own material code)."""
         stride = 4 if self.checker else 2
         first = len(self.block.rows)
         for m in self.materials:
@@ -299,66 +313,18 @@ class _Generator:
                                   "1 if checkered)." if self.checker else "."))
 
     def material_code(self) -> str:
-        """Material rows per object id, and ``surface_albedo``."""
-        first, stride, rows = self.material_rows()
-        lines = [rows, f"#define MATERIAL(id, row) U[{first} + {stride} * (id) + (row)]", ""]
-        lines += ["vec3 surface_albedo(vec3 p, int id)", "{"]
-        if self.checker:
-            lines += ["    if (MATERIAL(id, 3).w > 0.0) {",
-                      "        return checker(p, MATERIAL(id, 2).xyz, MATERIAL(id, 3).xyz, MATERIAL(id, 2).w);",
-                      "    }"]
-        lines += ["    return MATERIAL(id, 0).xyz;", "}", ""]
-        if self.checker:
-            lines += ["real surface_checker_parity(vec3 p, int id)", "{",
-                      "    return MATERIAL(id, 3).w > 0.0 ? checker_parity(p, MATERIAL(id, 2).w) : 0.0;",
-                      "}", ""]
-        return "\n".join(lines)
+        """``MATERIAL(id, row)``, the material rows per object id, and ``surface_albedo``."""
+        first, stride, _ = self.material_rows()
+        return self.template("materials", first=first, stride=stride, checker=self.checker)
 
     def light_code(self) -> tuple[str, list[str]]:
-        """The shading function, one block per light, and the light functions it calls."""
-        mode, needs = self.s.shading, set()
-        term, spec = self.light_terms()
-        lines = [f"// The {mode} model (reference_cpu/shading.py) summed over the lights, plus ambient.",
-                 "// Returns (colour, features): features codes the checker cell and, one bit per",
-                 "// light, whether a hard shadow blocked it (for the path label).",
-                 f"vec4 shade_{mode}(vec3 p, vec3 n, vec3 v, int id)", "{",
-                 "    vec3 albedo = surface_albedo(p, id);",
-                 "    real ka = MATERIAL(id, 0).w;",
-                 "    real kd = MATERIAL(id, 1).x;",
-                 "    real ks = MATERIAL(id, 1).y;",
-                 "    real shininess = MATERIAL(id, 1).z;",
-                 "    vec3 color = ka * albedo * AMBIENT;",
-                 f"    real features = {'surface_checker_parity(p, id)' if self.checker else '0.0'};",
-                 "    real visible;",
-                 "    LightSample s;"]
-        calls = [self.light_call(i, light) for i, light in enumerate(self.scene.lights)]
-        paired = self.paired_lights
-        if paired:
-            lines.append("    // The lights' samples first: their hard shadow rays are marched two by two.")
-            lines += [f"    LightSample s{i} = {call};" for i, (_, call) in enumerate(calls)]
-            lines += [f"    vec2 visible{i}{i + 1} = lights_visible(p, n, s{i}, s{i + 1});"
-                      for i in range(0, paired, 2)]
-        for i, (kind, call) in enumerate(calls):
-            needs.add(f"light_{kind}")
-            lines.append(f"    // light {i}: {kind}")
-            lines.append(f"    s = {f's{i}' if paired else call};")
-            if self.s.shadows != "none":
-                if i < paired:
-                    first = i - i % 2
-                    lines.append(f"    visible = visible{first}{first + 1}.{'xy'[i % 2]};")
-                else:
-                    lines.append("    visible = light_visible(p, n, s);")
-                lines.append("    s.radiance = visible * s.radiance;")
-                blocked = "(visible == 0.0 ? 1.0 : 0.0)" if self.s.shadows == "hard" else "0.0"
-                lines.append(f"    features = 2.0 * features + {blocked};")
-            else:
-                lines.append("    features = 2.0 * features;")
-            lines.append(f"    color = color + s.radiance * (kd * {term} * albedo + ks * {spec});")
-        lines += ["    return vec4(color, features);", "}", ""]
-        source = "\n".join(lines)
-        if self.s.shadows != "none" and self.scene.lights:
-            source = self.shadow_code() + "\n" + source
-        return source, sorted(needs)
+        """The shading function over the scene's lights (and the shadow functions it calls),
+        and the light functions it needs."""
+        lights = [{"index": i, "kind": self.light_call(i, light)[0]}
+                  for i, light in enumerate(self.scene.lights)]
+        source = self.template("shade", lights=lights, shadows=self.s.shadows,
+                               paired=self.paired_lights, checker=self.checker)
+        return source, sorted({f"light_{light['kind']}" for light in lights})
 
     def light_terms(self) -> tuple[str, str]:
         """The diffuse and specular terms of one light sample ``s`` in the shading mode."""
@@ -371,8 +337,8 @@ class _Generator:
         return term, spec
 
     def light_call(self, i: int, light) -> tuple[str, str]:
-        """Put light ``i``'s numbers in the parameter block; return its kind and the call
-        that samples it at p."""
+        """Put light ``i``'s numbers in the parameter block (``LIGHTi_POSITION``, ...); return
+        its kind and the call that samples it at p."""
         kind = LIGHT_KINDS.get(type(light))
         if kind is None:
             raise MarchlabError(f"the shader generator does not support lights of type "
@@ -398,162 +364,40 @@ class _Generator:
         b.named({L + "CONE": ("xy", (cos_outer, cos_inner - cos_outer))})
         return kind, f"light_spot(p, {L}POSITION, {L}RADIANCE, {L}ATTENUATION, {L}AXIS, {L}CONE)"
 
-    def shadow_code(self) -> str:
-        lines = [
-            "// Whether light s needs a shadow ray at p: points facing away from the light, or",
-            "// where it sends nothing, need none, as their diffuse and specular terms are zero",
-            "// whatever the visibility (taken as 1).",
-            "bool needs_shadow_ray(vec3 n, LightSample s)",
-            "{",
-            "    return dot(n, s.to_light) > 0.0 && max(s.radiance.x, max(s.radiance.y, s.radiance.z)) > 0.0;",
-            "}",
-            ""]
-        origin = ["// Shadow rays start SURFACE_OFFSET off the surface (else they find the surface",
-                  "// itself: shadow acne)."]
-        if self.lone_shadows:
-            lines += ["// How much of light s reaches p."] + origin + [
-                "real light_visible(vec3 p, vec3 n, LightSample s)",
-                "{",
-                "    if (!needs_shadow_ray(n, s)) {",
-                "        return 1.0;",
-                "    }",
-                "    vec3 origin = p + SURFACE_OFFSET * n;",
-                f"    return {self.s.shadows}_shadow(origin, s.to_light, s.distance);",
-                "}", ""]
-        if self.paired_lights:
-            lines += ["// How much of lights a and b reaches p, their shadow rays marched together."] + origin + [
-                "vec2 lights_visible(vec3 p, vec3 n, LightSample a, LightSample b)",
-                "{",
-                "    vec3 origin = p + SURFACE_OFFSET * n;",
-                "    return hard_shadow_pair(origin, a.to_light, a.distance, needs_shadow_ray(n, a),",
-                "                            b.to_light, b.distance, needs_shadow_ray(n, b));",
-                "}", ""]
-        return "\n".join(lines)
-
     def background_code(self) -> tuple[str, list[str]]:
-        bg = self.s.background
-        self.features.add(f"background:{bg.kind}")
-        if bg.kind == "solid":
-            self.block.named({"BACKGROUND_COLOR": ("xyz", bg.color)})
-            call, needs = "background_solid(direction, BACKGROUND_COLOR)", ["background_solid"]
+        """``background(direction)`` and the library function it calls."""
+        kind = self.s.background.kind
+        self.features.add(f"background:{kind}")
+        if kind == "solid":
+            self.block.named({"BACKGROUND_COLOR": ("xyz", self.s.background.color)})
         else:
-            self.block.named({"BACKGROUND_BOTTOM": ("xyz", bg.bottom)})
-            self.block.named({"BACKGROUND_TOP": ("xyz", bg.top)})
-            call, needs = ("background_sky(direction, BACKGROUND_BOTTOM, BACKGROUND_TOP)",
-                           ["background_sky"])
-        vec3 = self.types["vec3"]
-        return f"{vec3} background({vec3} direction)\n{{\n    return {call};\n}}\n", needs
+            self.block.named({"BACKGROUND_BOTTOM": ("xyz", self.s.background.bottom)})
+            self.block.named({"BACKGROUND_TOP": ("xyz", self.s.background.top)})
+        source = self.template("background", kind=kind)
+        if self.d.packets:        # the packet program's own pipeline calls it with packets
+            source = source.replace("vec3 ", "vec3p ")
+        return source, [f"background_{kind}"]
 
     def heat_code(self) -> str:
-        """``heat`` by linear interpolation between the stops of `scene_model.colormaps`."""
+        """``heat``, linear between the stops of `scene_model.colormaps`."""
         lit = self.d.literal
-        lines = ["// The heat ramp of scene_model/colormaps.py: linear between its stops.",
-                 "vec3 heat(real x)", "{", "    x = clamp(x, 0.0, 1.0);"]
-        for i in range(len(HEAT_STOPS) - 1):
-            x0, x1 = HEAT_STOPS[i], HEAT_STOPS[i + 1]
-            c0 = ", ".join(lit(c) for c in HEAT_COLORS[i])
-            c1 = ", ".join(lit(c) for c in HEAT_COLORS[i + 1])
-            test = f"if (x <= {lit(x1)}) " if i < len(HEAT_STOPS) - 2 else ""
-            lines.append(f"    {test}return vec3({c0}) + (vec3({c1}) - vec3({c0})) * "
-                         f"((x - {lit(x0)}) / {lit(x1 - x0)});")
-        lines += ["}", ""]
-        return "\n".join(lines)
+        segments = [{"x0": lit(HEAT_STOPS[i]), "x1": lit(HEAT_STOPS[i + 1]),
+                     "width": lit(HEAT_STOPS[i + 1] - HEAT_STOPS[i]),
+                     "c0": ", ".join(lit(c) for c in HEAT_COLORS[i]),
+                     "c1": ", ".join(lit(c) for c in HEAT_COLORS[i + 1])}
+                    for i in range(len(HEAT_STOPS) - 1)]
+        return self.template("heat", segments=segments)
 
     # --- the per-pixel pipeline -----------------------------------------------------------------
 
     def pixel_code(self) -> str:
-        """``trace``, the whole pixel: glsl/trace.glsl's around a generated ``pixel_color``,
-        or, with mirrors, a generated one whose reflection loop marches the camera ray too."""
+        """``trace``, the whole pixel: with mirrors, a reflection loop that marches the camera
+        ray as its first bounce; without, one march and ``pixel_color``."""
         if self.s.shading in LIT_MODES and self.reflections:
-            return self.reflection_trace_code()
-        return self.pixel_color_code() + "\n" + self.d.library("trace").select(["trace"])
-
-    def pixel_color_code(self) -> str:
-        mode = self.s.shading
-        head = ["// The colour of one pixel and its path label, given its primary ray, the march",
-                "// result h and, on a hit, the normal n and object id there",
-                "// (reference_cpu/render.py, Tracer.trace).",
-                "vec4 pixel_color(vec3 origin, vec3 direction, Hit h, vec3 n, int id)", "{"]
-        path = f"{self.d.to_real('path_step(0u, id, 0u)')}"
-        if mode == "steps":                  # the colour jumps with every step: label them
-            path = f"{self.d.to_real('path_step(uint(h.steps), id, 0u)')}"
-            color = f"heat({self.d.to_real('h.steps')} / {self.d.to_real('MAX_STEPS')})"
-        elif mode == "normals":
-            color = "h.hit == 1 ? shade_normals(n) : background(direction)"
-        elif mode == "depth":
-            color = "h.hit == 1 ? shade_depth(h.t, MAX_DISTANCE) : background(direction)"
-        else:
-            return self.lit_pixel_code(head)
-        return "\n".join(head + [f"    return vec4({color}, {path});", "}", ""])
-
-    def lit_pixel_code(self, head: list[str]) -> str:
-        """Shading and fog of the primary hit (no mirrors: one bounce)."""
-        shade = f"shade_{self.s.shading}(p, n, -d, id)"
-        fog = ["    shaded = apply_fog(shaded, h.t, FOG_COLOR, FOG_DENSITY);"] if self.fog else []
-        to_real = self.d.to_real
-        return "\n".join(head + [
-            "    if (h.hit == 0) {",
-            f"        return vec4(background(direction), {to_real('path_step(0u, -1, 0u)')});",
-            "    }",
-            "    vec3 d = direction;",
-            "    precise vec3 p = origin + h.t * d;",
-            f"    vec4 lit = {shade};",
-            "    vec3 shaded = lit.xyz;"] + fog + [
-            f"    return vec4(shaded, {to_real('path_step(0u, id, uint(lit.w))')});", "}", ""])
-
-    def reflection_trace_code(self) -> str:
-        """``trace`` with source 000's reflection loop, the camera ray its first bounce."""
-        self.features.add("reflections")
-        shade = f"shade_{self.s.shading}(p, n, -d, id)"
-        fog = ["        shaded = apply_fog(shaded, h.t, FOG_COLOR, FOG_DENSITY);"] if self.fog else []
-        return "\n".join([
-            "// One pixel, from its camera ray to everything the Frame holds (reference_cpu/render.py,",
-            "// Tracer.trace and lit_color). Each bounce marches its ray, shades the hit and adds",
-            "// the colour weighted by the product of the kr seen so far; a ray that hits nothing",
-            "// adds the background. Bounce 0 is the camera ray: its march, normal and object id",
-            "// are the pixel's primary buffers. (The reference marches the camera ray first, then",
-            "// loops; here the loop does it, so that llvmpipe, which runs every statement of a",
-            "// loop body for a whole block of pixels, never runs a march or a normal twice.)",
-            "Pixel trace(vec3 origin, vec3 direction)", "{",
-            "    Pixel px;",
-            "    px.normal = vec3(0.0);",
-            "    px.id = -1;",
-            "    vec3 color = vec3(0.0);",
-            "    uint path = 0u;",
-            "    real weight = 1.0;",
-            "    vec3 o = origin;",
-            "    vec3 d = direction;",
-            "    for (int bounce = 0; bounce <= REFLECTION_DEPTH; bounce++) {",
-            "        Hit h = march(o, d, MAX_DISTANCE);",
-            "        if (bounce == 0) {",
-            "            px.primary = h;",
-            "        }",
-            "        if (h.hit == 0) {",
-            "            color = color + weight * background(d);",
-            "            path = path_step(path, -1, 0u);",
-            "            break;",
-            "        }",
-            "        precise vec3 p = o + h.t * d;",
-            "        vec3 n = estimate_normal(p);",
-            "        int id = scene_object_id(p);",
-            "        if (bounce == 0) {",
-            "            px.normal = n;",
-            "            px.id = id;",
-            "        }",
-            f"        vec4 lit = {shade};",
-            "        vec3 shaded = lit.xyz;"] + fog + [
-            "        color = color + weight * shaded;",
-            "        path = path_step(path, id, uint(lit.w));",
-            "        weight = weight * MATERIAL(id, 1).w;",
-            "        if (bounce == REFLECTION_DEPTH || !(weight > 0.0)) {",
-            "            break;",
-            "        }",
-            "        // Continue just off the mirror, in the mirrored direction.",
-            "        o = p + SURFACE_OFFSET * n;",
-            "        d = reflect(d, n);",
-            "    }",
-            f"    px.color_path = vec4(color, {self.d.to_real('path')});",
-            "    return px;", "}", ""])
+            self.features.add("reflections")
+            return self.template("trace", reflections=True, fog=self.fog)
+        return (self.template("pixel", fog=self.fog) + "\n"
+                + self.template("trace", reflections=False))
 
 
 def _banner(title: str) -> str:

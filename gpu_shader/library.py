@@ -1,9 +1,13 @@
-"""The hand-written shader building blocks (``glsl/*.glsl``) and how only the needed ones are picked.
+"""The hand-written shader sources, and how a program takes only what its scene needs.
 
-Each ``.glsl`` file is a library of functions, each preceded by its comment. The generator
-asks for functions by name (``sdf_sphere``, ``op_union``, ...); `Library.select` returns those
-and every library function they call, in file order, with their comments, so a shader holds
-exactly what its scene uses.
+Each ``glsl/*.glsl`` file is a library of building blocks, each function preceded by its
+comment. The generator asks for functions by name (``sdf_sphere``, ``op_union``, ...);
+`Library.select` returns those and every library function they call, in file order, with
+their comments, so a shader holds exactly what its scene uses.
+
+The files in ``glsl/pipeline/`` and the entry points are templates: GLSL with a few Jinja
+tags (``{% if fog %}``, ``{% for light in lights %}``, ``{{ first }}``) that `fill_template`
+fills in for one scene, so that the generator chooses and numbers but never spells GLSL.
 """
 
 from __future__ import annotations
@@ -12,6 +16,8 @@ import re
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
+
+import jinja2
 
 GLSL_DIR = Path(__file__).parent / "glsl"
 
@@ -61,6 +67,18 @@ class Library:
 def glsl_file(name: str) -> str:
     """The text of ``glsl/<name>`` (an entry point, the vertex shader, ...), read once."""
     return (GLSL_DIR / name).read_text()
+
+
+# Tags on lines of their own leave no blank line behind (trim_blocks, lstrip_blocks); a name
+# a template uses but the generator did not give is an error, not an empty string.
+_TEMPLATES = jinja2.Environment(loader=jinja2.FileSystemLoader(GLSL_DIR), trim_blocks=True,
+                                lstrip_blocks=True, keep_trailing_newline=True,
+                                undefined=jinja2.StrictUndefined, autoescape=False)
+
+
+def fill_template(name: str, **context) -> str:
+    """The template ``glsl/<name>`` filled in with ``context`` (parsed once, then cached)."""
+    return _TEMPLATES.get_template(name).render(**context)
 
 
 @cache

@@ -167,7 +167,7 @@ def _first_line(err: Exception) -> str:
 
 def render(scene: Scene, width: int, height: int, precision: str = "float32",
            progress: Callable[[int, int], None] | None = None,
-           packets: bool = True) -> Frame:
+           packets: bool = True, path_labels: bool = False) -> Frame:
     """Render ``scene`` with the OpenCL kernel (see `marchlab.render`).
 
     ``packets`` (the default) runs the packet program, LANES pixels of a row per work-item
@@ -180,7 +180,7 @@ def render(scene: Scene, width: int, height: int, precision: str = "float32",
         raise MarchlabError(f"the OpenCL device {dev.label} has no float64 (cl_khr_fp64); "
                             "use --precision float32")
     cl = _import_pyopencl()
-    program = generate(scene, width, height, precision=precision,
+    program = generate(scene, width, height, precision=precision, path_labels=path_labels,
                        dialect="opencl-packets" if packets else "opencl")
     dtype = np.dtype(np.float32 if precision == "float32" else np.float64)
     kernel = _kernel(cl, dev, program.source, precision)
@@ -204,7 +204,10 @@ def render(scene: Scene, width: int, height: int, precision: str = "float32",
     for plane, buffer in zip(planes, outputs):
         cl.enqueue_copy(dev.queue, plane, buffer)
     dev.queue.finish()
-    return frame_from_planes(planes, scene, "opencl", precision)
+    frame = frame_from_planes(planes, scene, "opencl", precision)
+    if not path_labels:
+        frame.path = None
+    return frame
 
 
 def _kernel(cl, dev: Device, source: str, precision: str):

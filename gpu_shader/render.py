@@ -44,11 +44,12 @@ def device_name() -> str:
 
 
 def render(scene: Scene, width: int, height: int, precision: str = "float32",
-           progress: Callable[[int, int], None] | None = None) -> Frame:
+           progress: Callable[[int, int], None] | None = None,
+           path_labels: bool = False) -> Frame:
     """Render ``scene`` on the GPU in float32 (see `marchlab.render`)."""
     if precision != "float32":
         raise MarchlabError(f"the gpu backend renders in float32 only (asked for {precision})")
-    return _renderer().render(scene, width, height, progress)
+    return _renderer().render(scene, width, height, progress, path_labels)
 
 
 def render_program(scene: Scene, program: Program, width: int, height: int) -> Frame:
@@ -76,8 +77,10 @@ class Renderer:
         self.max_block = int(ctx.info["GL_MAX_UNIFORM_BLOCK_SIZE"])
         self.flat_rows = min(MAX_FLAT_ROWS, int(ctx.info.get("GL_MAX_VARYING_VECTORS", 0)))
 
-    def render(self, scene: Scene, width: int, height: int, progress=None) -> Frame:
-        program = generate(scene, width, height, flat_rows=self.flat_rows)
+    def render(self, scene: Scene, width: int, height: int, progress=None,
+               path_labels: bool = False) -> Frame:
+        program = generate(scene, width, height, flat_rows=self.flat_rows,
+                           path_labels=path_labels)
         return self.render_program(scene, program, width, height, progress)
 
     def render_program(self, scene: Scene, generated: Program, width: int, height: int,
@@ -92,7 +95,10 @@ class Renderer:
         with self.ctx:           # make our context current: the process may hold others
             program, vao = self._program(generated.source, generated.vertex_source)
             fbo = self.target(width, height)
-            return self._draw(scene, program, vao, fbo, parameters, width, height, progress)
+            frame = self._draw(scene, program, vao, fbo, parameters, width, height, progress)
+        if not generated.path_labels:
+            frame.path = None
+        return frame
 
     def _draw(self, scene, program, vao, fbo, parameters, width, height, progress) -> Frame:
         buffer = self.ctx.buffer(parameters.tobytes())

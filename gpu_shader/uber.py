@@ -1,7 +1,7 @@
 """One "uber" fragment shader for every scene it supports, to time against the specialised one.
 
 `gpu_shader.generate` writes a program per scene holding only what the scene uses. The uber
-program is the other design (source 002's single shader with an ``if`` per technique): ONE
+program is the other design (one shader with an ``if`` per technique): ONE
 text, the same for every scene, holding every primitive, light kind, shading mode, shadow
 mode, fog, background, checker and normal stencil, each chosen at run time by values in the
 parameter block. The scene becomes tables of rows (the layout is written into the program as
@@ -16,7 +16,7 @@ parameter block. The scene becomes tables of rows (the layout is written into th
 
 ``glsl/uber.glsl`` walks these tables; the numbers it computes are those of the specialised
 program, expression for expression, so both render the same `Frame`. `compare_specialised_uber`
-times the two on one context (issue 6).
+times the two on one context.
 """
 
 from __future__ import annotations
@@ -39,7 +39,7 @@ from scene_model.shapes import (Box, CappedCylinder, Capsule, Cone, Plane, Rotat
 from .context import renderer_name
 from .dialects import GLSL, MAX_FLAT_ROWS
 from .generate import Program, generate
-from .library import glsl_file, load_library
+from .library import fill_template, glsl_file, load_library
 from .parameters import ParameterBlock
 from .render import ShaderCompileError, _renderer, compile_message
 from .sdf_code import primitive_parameters, transform_parameters
@@ -141,7 +141,7 @@ def uber_program(scene: Scene, width: int, height: int) -> Program:
         at = MATERIALS_START + MATERIAL_STRIDE * i
         rows[at:at + MATERIAL_STRIDE] = _material_rows(scene.materials[primitive.material])
     return Program(_source(block), rows, FEATURES,
-                   GLSL.vertex_shader(ROWS, HEADER_ROWS, MAX_FLAT_ROWS))
+                   GLSL.vertex_shader(ROWS, HEADER_ROWS, MAX_FLAT_ROWS), path_labels=True)
 
 
 def _header(scene: Scene, width: int, height: int) -> ParameterBlock:
@@ -268,8 +268,9 @@ def _source(block: ParameterBlock) -> str:
         ("shading (glsl/shading.glsl)", load_library("shading").select(shading)),
         ("normals, lights, materials and shading by run-time switches (glsl/uber.glsl)",
          uber.select(["estimate_normal", "pixel_color"], provided=set(SCENE_FUNCTIONS))),
-        ("the pixel, from its camera ray (glsl/trace.glsl)", load_library("trace").select(["trace"])),
-        ("the entry point (glsl/main.frag)", glsl_file(glsl.entry)),
+        ("the pixel, from its camera ray (glsl/pipeline/trace.glsl)",
+         fill_template("pipeline/trace.glsl", reflections=False, path_labels=True, mode="")),
+        ("the entry point (glsl/main.frag)", fill_template(glsl.entry, path_labels=True)),
     ]
     head = [glsl.prelude,
             _banner(f"parameters: {ROWS} rows whatever the scene; the first {HEADER_ROWS} (camera, "
@@ -277,7 +278,7 @@ def _source(block: ParameterBlock) -> str:
             + glsl.declare_parameters(ROWS, HEADER_ROWS, MAX_FLAT_ROWS),
             block.defines(),
             _banner("codes of the run-time switches and the table layout") + layout,
-            glsl.structs()]
+            glsl.structs(path_labels=True)]
     body = [_banner(title) + text for title, text in parts]
     return glsl.finish("\n".join(head + body))
 
@@ -286,7 +287,7 @@ def _banner(title: str) -> str:
     return f"// ---- {title} " + "-" * max(4, 86 - len(title)) + "\n\n"
 
 
-# --- timing: the specialised program against the uber program (issue 6) ----------------------
+# --- timing: the specialised program against the uber program ----------------------------
 
 def compare_specialised_uber(scene: Scene, width: int, height: int, repeat: int = 5) -> dict:
     """Time the specialised and the uber program on ``scene``, side by side on one context.

@@ -294,8 +294,9 @@ def cmd_compare(args) -> int:
     b_precision = args.b_precision or BACKENDS[args.b].precisions[0]
     a_precision = args.a_precision or (
         b_precision if b_precision in BACKENDS[args.a].precisions else None)
-    a = render(scene, width, height, backend=args.a, precision=a_precision)
-    b = render(scene, width, height, backend=args.b, precision=b_precision)
+    # Path labels tell the gates where either image may jump (marchlab.compare).
+    a = render(scene, width, height, backend=args.a, precision=a_precision, path_labels=True)
+    b = render(scene, width, height, backend=args.b, precision=b_precision, path_labels=True)
     c = compare_frames(a, b, epsilon=scene.render.epsilon)
     gates = gates_against(a.precision)
     failed = failures(c, gates)

@@ -21,8 +21,8 @@ from scene_model.scene import Scene, rendered_scene
 class Backend:
     """Where a backend lives and which precisions it computes in (the first is its default).
 
-    The module has ``render(scene, width, height, precision, progress) -> Frame`` and
-    ``check()``, which raises `MarchlabError` saying what is missing if it cannot run here.
+    The module has ``render(scene, width, height, precision, progress, path_labels) -> Frame``
+    and ``check()``, which raises `MarchlabError` saying what is missing if it cannot run here.
     """
     module: str
     precisions: tuple[str, ...]
@@ -43,7 +43,8 @@ PRECISIONS = ("float32", "float64")
 
 def render(scene: Scene, width: int, height: int, backend: str = "numpy",
            precision: str | None = None,
-           progress: Callable[[int, int], None] | None = None) -> Frame:
+           progress: Callable[[int, int], None] | None = None,
+           path_labels: bool = False) -> Frame:
     """Render ``scene`` to a `Frame` of ``width`` x ``height`` pixels.
 
     Parameters
@@ -59,6 +60,10 @@ def render(scene: Scene, width: int, height: int, backend: str = "numpy",
         Default: the backend's own (float64 for numpy, float32 for gpu and opencl).
     progress : callable, optional
         Called as ``progress(done, total)`` while rendering.
+    path_labels : bool
+        Also compute each pixel's path label (`scene_model.frame.Frame.path`), which tells
+        two renderers' frames apart only where the image may jump (`marchlab.compare`).
+        Off by default: it is bookkeeping for the equivalence suite, not rendering.
     """
     if backend not in BACKENDS:
         raise MarchlabError(f"unknown backend {backend!r} (available: {', '.join(BACKENDS)})")
@@ -76,7 +81,7 @@ def render(scene: Scene, width: int, height: int, backend: str = "numpy",
     module = importlib.import_module(BACKENDS[backend].module)
     # Backends draw objects only: the bodies become spheres after the scene's objects.
     return module.render(rendered_scene(scene), width, height, precision=precision,
-                         progress=progress)
+                         progress=progress, path_labels=path_labels)
 
 
 def backend_problem(backend: str) -> str | None:

@@ -3,8 +3,8 @@
 For each pixel: march the primary ray; at a hit, estimate the normal, look up the material,
 gather the light from every light (with shadow rays), shade, add fog; then, while the surface
 is a mirror and bounces remain, reflect the ray and repeat, weighting each bounce's colour by
-the product of the kr seen so far (source 000's iterative loop). A ray that hits nothing sees
-the background.
+the product of the kr seen so far (Whitted 1980's mirror rays, as a loop). A ray that hits
+nothing sees the background.
 
 Rays are processed in blocks of whole rows, so memory stays bounded and progress can be shown.
 """
@@ -34,13 +34,15 @@ AOV_MODES = ("normals", "depth", "steps")
 
 
 def render(scene: Scene, width: int, height: int, precision: str = "float64",
-           progress: Callable[[int, int], None] | None = None) -> Frame:
+           progress: Callable[[int, int], None] | None = None,
+           path_labels: bool = False) -> Frame:
     """Render ``scene`` at ``width`` x ``height`` pixels in float32 or float64.
 
-    ``progress(done, total)`` is called after each block of rays, if given.
+    ``progress(done, total)`` is called after each block of rays, if given; with
+    ``path_labels`` the frame holds each pixel's path label (`Frame.path`), else None.
     """
     dtype = np.dtype(precision)
-    tracer = Tracer(scene, dtype)
+    tracer = Tracer(scene, dtype, path_labels)
     origin, directions = camera_rays(scene.camera, width, height, dtype)
     directions = directions.reshape(-1, 3)
     n = len(directions)
@@ -48,8 +50,9 @@ def render(scene: Scene, width: int, height: int, precision: str = "float64",
         "color": np.zeros((n, 3), np.float32), "depth": np.full(n, np.inf, dtype),
         "normal": np.zeros((n, 3), dtype), "steps": np.zeros(n, np.int32),
         "object_id": np.full(n, -1, np.int32), "hit": np.zeros(n, bool),
-        "path": np.zeros(n, np.uint32),
     }
+    if path_labels:
+        out["path"] = np.zeros(n, np.uint32)
     block = max(1, BLOCK_RAYS // width) * width
     for start in range(0, n, block):
         rows = slice(start, min(start + block, n))
@@ -75,10 +78,14 @@ def path_step(path, ids, features=0):
 
 
 class Tracer:
-    """A scene prepared for tracing in one precision: its SDFs and per-primitive material tables."""
+    """A scene prepared for tracing in one precision: its SDFs and per-primitive material tables.
 
-    def __init__(self, scene: Scene, dtype: np.dtype):
+    With ``path_labels``, `trace` also returns each ray's path label (`path_step`).
+    """
+
+    def __init__(self, scene: Scene, dtype: np.dtype, path_labels: bool = False):
         self.scene, self.settings, self.dtype = scene, scene.render, dtype
+        self.path_labels = path_labels
         self.sdf = build_scene_sdf(scene.objects, dtype)
         self.sdf_ids = build_scene_sdf(scene.objects, dtype, with_ids=True)
         # How far each step of a march goes (relaxation, culling): the same for primary,
@@ -113,7 +120,7 @@ class Tracer:
         # The path label (Frame.path) of the AOV modes: the object hit, and for the steps
         # mode the step count too, as its colour jumps with every step.
         counted = steps if s.shading == "steps" else np.zeros_like(steps)
-        path = path_step(counted.astype(np.uint32), object_id)
+        path = path_step(counted.astype(np.uint32), object_id) if self.path_labels else None
         if s.shading == "steps":
             color = shading.shade_steps(steps, s.max_steps)
         elif s.shading in AOV_MODES:
@@ -122,20 +129,24 @@ class Tracer:
                           else shading.shade_depth(t[hit], s.max_distance))
         else:
             color, path = self.lit_color(origin, directions, t, hit, normal, object_id)
-        return {"color": np.clip(color, 0, 1), "depth": t, "normal": normal, "steps": steps,
-                "object_id": object_id, "hit": hit, "path": path}
+        out = {"color": np.clip(color, 0, 1), "depth": t, "normal": normal, "steps": steps,
+               "object_id": object_id, "hit": hit}
+        if self.path_labels:
+            out["path"] = path
+        return out
 
     def lit_color(self, origin, directions, t, hit, normal, object_id):
-        """Shaded colour with fog and mirror bounces (source 000's iterative reflection loop).
+        """Shaded colour with fog and mirror bounces (Whitted 1980, iterated instead of recursed).
 
-        Also returns each pixel's path label (see `scene_model.frame.Frame.path`): at every
-        bounce it takes in the object id hit (-1 for the background), the checker cell's
-        parity and which lights are hard-shadowed, so that it changes exactly where the
-        colour may jump.
+        Also returns each pixel's path label (see `scene_model.frame.Frame.path`), or None
+        without ``path_labels``: at every bounce it takes in the object id hit (-1 for the
+        background), the checker cell's parity and which lights are hard-shadowed, so that
+        it changes exactly where the colour may jump.
         """
         s = self.settings
+        labels = self.path_labels
         color = np.zeros(directions.shape, dtype=self.dtype)
-        path = np.zeros(len(directions), dtype=np.uint32)
+        path = np.zeros(len(directions), dtype=np.uint32) if labels else None
         weight = np.ones(len(directions), dtype=self.dtype)   # product of kr so far
         ray = np.arange(len(directions))                      # which pixel each ray serves
         o = np.broadcast_to(origin, directions.shape)
@@ -150,11 +161,13 @@ class Tracer:
             p = o[hit] + t[hit, None] * d[hit]
             miss = ~hit
             color[ray[miss]] += weight[miss, None] * shading.background(d[miss], s.background)
-            path[ray[miss]] = path_step(path[ray[miss]], -1)
+            if labels:
+                path[ray[miss]] = path_step(path[ray[miss]], -1)
 
             surface = self.surface(p, normal, -d[hit], ids)
             shaded, features = self.shade(surface)
-            path[ray[hit]] = path_step(path[ray[hit]], ids, features)
+            if labels:
+                path[ray[hit]] = path_step(path[ray[hit]], ids, features)
             if s.fog.density > 0:
                 shaded = shading.apply_fog(shaded, t[hit], np.asarray(s.fog.color, self.dtype),
                                            self.dtype.type(s.fog.density))
@@ -190,16 +203,19 @@ class Tracer:
     def shade(self, surface: shading.Surface):
         """The shading model of the render settings, given the light reaching each point.
 
-        Returns the colour (N, 3) and a code (N,) of the discontinuous features seen at
-        each point: the checker parity, then one bit per light blocked by a hard shadow.
+        Returns the colour (N, 3) and, with path labels, a code (N,) of the discontinuous
+        features seen at each point: the checker parity, then one bit per light blocked by a
+        hard shadow (None without).
         """
         s = self.settings
         ambient = np.asarray(s.ambient, dtype=self.dtype)
         arriving = [self.light_arriving(light, surface) for light in self.scene.lights]
         incoming = [(to_light, radiance) for to_light, radiance, _ in arriving]
-        features = self.checker_parity(surface)
-        for _, _, blocked in arriving:
-            features = 2 * features + blocked
+        features = None
+        if self.path_labels:
+            features = self.checker_parity(surface)
+            for _, _, blocked in arriving:
+                features = 2 * features + blocked
         if s.shading == "phong":
             return shading.shade_phong(surface, incoming, ambient), features
         if s.shading == "blinn_phong":

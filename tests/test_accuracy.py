@@ -238,7 +238,7 @@ def test_embree_scenes_keep_hits_within_epsilon_and_the_report_names_their_truth
 
 def test_bench_accuracy_says_which_scenes_it_left_out_without_embree(tmp_path, capsys,
                                                                        monkeypatch):
-    monkeypatch.setattr(A, "embree_problem", lambda: "the Embree truth needs embreex")
+    monkeypatch.setattr(R, "embree_problem", lambda: "the Embree truth needs embreex")
     report = tmp_path / "report.md"
     code, _, err = run_cli(capsys, "bench", "accuracy", "--quick", "--size", "16x12",
                            "--repeat", "1", "-o", report)

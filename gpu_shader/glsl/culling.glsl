@@ -1,6 +1,6 @@
-// Bounding-sphere culling: the GLSL twin of reference_cpu/culling.py (source 000's
-// intersectsBoundingVolume). The generator writes ray_objects, which calls this once per
-// bounded object before a march, and march_sdf, which leaves out the objects a ray misses.
+// Bounding-sphere culling: the GLSL twin of reference_cpu/culling.py (bounding spheres as in
+// Whitted 1980). The generator writes ray_objects, which calls this once per bounded object
+// before a march, and march_sdf, which leaves out the objects a ray misses.
 
 // Does the ray origin + t direction, t >= 0, touch the sphere (centre xyz, radius w)?
 // With oc = o - c, b = oc . d and c' = |oc|^2 - r^2 the line meets it where

@@ -1,7 +1,7 @@
 // Where each light comes from and how strongly: the GLSL twin of reference_cpu/lights.py.
 // Point and spot lights fade as 1 / (K_c + K_l d + K_q d^2); a spot light also fades from
-// its inner to its outer cone, linearly in cos(theta) (source 003, after LearnOpenGL's
-// "Light casters"). A directional light is the same everywhere.
+// its inner to its outer cone, linearly in cos(theta) (de Vries, LearnOpenGL, "Light
+// casters"). A directional light is the same everywhere.
 
 // 1 / (K_c + K_l d + K_q d^2); k = (K_c, K_l, K_q).
 real attenuation(real distance, vec3 k)

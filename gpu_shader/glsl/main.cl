@@ -1,10 +1,11 @@
+{# A template: gpu_shader/generate.py fills in the {{ }} parts (Jinja). #}
 // The OpenCL kernel's entry point: one work-item per pixel, the twin of main.frag. It writes
 // the same three planes of 4 values per pixel that the GLSL shader writes into its render
 // targets, so both backends build their Frame the same way (gpu_shader/planes.py).
 //
 //   color_hit:    rgb colour in [0, 1], 1 on a hit
 //   normal_depth: unit normal, depth t (inf on a miss)
-//   steps_id:     SDF evaluations, object id (-1 on a miss), path label (24 bits)
+//   steps_id:     SDF evaluations, object id (-1 on a miss), path label (24 bits; 0 without)
 //
 // The calls below are written as in GLSL; generating the program passes the parameter buffer
 // P on as their first argument (thread_parameters in gpu_shader/dialects.py).
@@ -28,7 +29,7 @@ __kernel void render(PARAMETERS,
 
     Hit h = px.primary;
     int pixel = row * (int)(IMAGE_WIDTH) + column;
-    color_hit[pixel] = vec4(clamp(px.color_path.xyz, 0.0, 1.0), (real)(h.hit));
+    color_hit[pixel] = vec4(clamp(px.color, 0.0, 1.0), (real)(h.hit));
     normal_depth[pixel] = vec4(px.normal, h.hit == 1 ? h.t : INFINITY);
-    steps_id[pixel] = vec4((real)(h.steps), (real)(px.id), px.color_path.w, 0.0);
+    steps_id[pixel] = vec4((real)(h.steps), (real)(px.id), {{ "px.path" if path_labels else "0.0" }}, 0.0);
 }

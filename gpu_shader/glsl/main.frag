@@ -1,3 +1,4 @@
+{# A template: gpu_shader/generate.py fills in the {{ }} parts (Jinja). #}
 // The fragment shader's entry point: one invocation per pixel. It writes every buffer of a
 // marchlab Frame into three render targets in one draw: two RGBA32F, and one RGBA32I for the
 // integers, which the Frame then uses as they are read back (no conversion per pixel).
@@ -5,7 +6,7 @@
 layout(location = 0) out vec4 out_color;     // rgb: colour in [0, 1], a: 1 on a hit
 layout(location = 1) out vec4 out_normal;    // xyz: unit normal, w: depth t (inf on a miss)
 layout(location = 2) out ivec4 out_steps;    // x: SDF evaluations, y: object id (-1),
-                                             // z: path label (24 bits, exact in a float)
+                                             // z: path label (24 bits), 0 without labels
 
 void main()
 {
@@ -19,7 +20,7 @@ void main()
     Pixel px = trace(CAMERA_POSITION, direction);
 
     Hit h = px.primary;
-    out_color = vec4(clamp(px.color_path.xyz, 0.0, 1.0), float(h.hit));
+    out_color = vec4(clamp(px.color, 0.0, 1.0), float(h.hit));
     out_normal = vec4(px.normal, h.hit == 1 ? h.t : INFINITY);
-    out_steps = ivec4(h.steps, px.id, int(px.color_path.w), 0);
+    out_steps = ivec4(h.steps, px.id, {{ "int(px.path)" if path_labels else "0" }}, 0);
 }

@@ -1,6 +1,6 @@
 // Shading: the GLSL twin of reference_cpu/shading.py.
 //
-// Phong (source 000, after Phong 1975):
+// Phong (Phong 1975):
 //     I = ka albedo i_a + sum_m radiance_m (kd max(N.L_m, 0) albedo + ks max(R_m.V, 0)^alpha)
 // with R_m = reflect(-L_m, N). Blinn-Phong uses N.H, H = normalize(L + V). The specular
 // term is zero where N.L <= 0, so a light behind a surface cannot make a highlight on it.

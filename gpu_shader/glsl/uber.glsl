@@ -2,9 +2,8 @@
 // The specialised generator (gpu_shader/generate.py) writes a scene's SDF, lights and
 // shading out as code; here the scene is data in the parameter block and these functions
 // walk it: a loop over the objects with a switch on each one's shape, a loop over the
-// lights with a switch on each one's kind, and a switch on the shading mode. Issue 6 times
-// the two against each other; source 002's "ORIGINAL" shader, one program with an `if` per
-// rendering technique, is the same idea.
+// lights with a switch on each one's kind, and a switch on the shading mode.
+// compare_specialised_uber times the two against each other.
 //
 // Every expression that makes a number is the one the generator writes, in the same order,
 // so the two programs render the same Frame (tests/gpu/test_uber_shader.py). The records
@@ -270,7 +269,7 @@ vec3 heat(real x)
     return vec3(0.0);
 }
 
-// A lit pixel: shading, fog and source 000's reflection loop. Each bounce adds its shaded
+// A lit pixel: shading, fog and Whitted's mirror reflections. Each bounce adds its shaded
 // colour weighted by the product of the kr seen so far; a ray that hits nothing adds the
 // background. Without a mirror (or with REFLECTION_DEPTH 0) the loop stops after the first
 // bounce, where colour and path are those of a loopless pixel exactly (0 + 1 x = x).

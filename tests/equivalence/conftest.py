@@ -45,7 +45,8 @@ def reference_frame(scene, width: int, height: int, precision: str):
     """The NumPy reference frame of ``scene``, rendered once per run (keyed by its TOML)."""
     key = (scene_to_toml(scene), width, height, precision)
     if key not in _REFERENCES:
-        _REFERENCES[key] = render(scene, width, height, backend="numpy", precision=precision)
+        _REFERENCES[key] = render(scene, width, height, backend="numpy", precision=precision,
+                                  path_labels=True)
     return _REFERENCES[key]
 
 

@@ -34,7 +34,8 @@ def test_backend_matches_reference_within_gates(backend, name, scene, size,
                                                 reference_precision, tmp_path):
     width, height = size
     reference = reference_frame(scene, width, height, reference_precision)
-    candidate = render(scene, width, height, backend=backend, precision="float32")
+    candidate = render(scene, width, height, backend=backend, precision="float32",
+                       path_labels=True)
     c = compare_frames(reference, candidate, epsilon=scene.render.epsilon)
     TRENDS.append((name, backend, reference_precision, c.psnr, c.ssim))
     gates = gates_against(reference_precision)
@@ -54,7 +55,7 @@ def test_buffers_have_the_reference_layout(backend, name, scene, size):
     """Same shapes, dtypes and miss conventions as the reference frame."""
     width, height = size
     reference = reference_frame(scene, width, height, "float32")
-    frame = render(scene, width, height, backend=backend)
+    frame = render(scene, width, height, backend=backend, path_labels=True)
     for field in ("color", "depth", "normal", "steps", "object_id", "hit", "path"):
         a, b = getattr(reference, field), getattr(frame, field)
         assert b.shape == a.shape, field
@@ -69,7 +70,7 @@ def test_the_gates_catch_a_colour_error_of_two_levels(backend):
     """The suite can fail: a frame 2/255 too bright in its interior fails the colour gate."""
     name, scene, (width, height) = CASES[0]
     reference = reference_frame(scene, width, height, "float32")
-    frame = render(scene, width, height, backend=backend)
+    frame = render(scene, width, height, backend=backend, path_labels=True)
     frame.color = np.clip(frame.color + np.float32(2 / 255), 0, 1)
     failed = failures(compare_frames(reference, frame, epsilon=scene.render.epsilon),
                       gates_against("float32"))

@@ -120,7 +120,8 @@ def test_opencl_float32_matches_numpy_float32_to_1e_3_in_colour(opencl, name, sc
                                                                 tmp_path):
     width, height = size
     reference = reference_frame(scene, width, height, "float32")
-    candidate = render(scene, width, height, backend="opencl", precision="float32")
+    candidate = render(scene, width, height, backend="opencl", precision="float32",
+                       path_labels=True)
     c = compare_frames(reference, candidate, epsilon=scene.render.epsilon)
     failed = float32_failures(c)
     message = ""
@@ -135,7 +136,8 @@ def test_opencl_float64_matches_numpy_float64_to_1e_9_in_depth(opencl_float64, n
                                                                size, tmp_path):
     width, height = size
     reference = reference_frame(scene, width, height, "float64")
-    candidate = render(scene, width, height, backend="opencl", precision="float64")
+    candidate = render(scene, width, height, backend="opencl", precision="float64",
+                       path_labels=True)
     c = compare_frames(reference, candidate, epsilon=scene.render.epsilon)
     failed = float64_failures(reference, candidate, c)
     message = ""
@@ -149,7 +151,8 @@ def test_the_float32_bound_catches_a_colour_error_the_gates_allow(opencl):
     """2e-3 on every colour passes the gates' 1/255 but fails the tight pair's 1e-3."""
     name, scene, (width, height) = CASES[0]
     reference = reference_frame(scene, width, height, "float32")
-    frame = render(scene, width, height, backend="opencl", precision="float32")
+    frame = render(scene, width, height, backend="opencl", precision="float32",
+                   path_labels=True)
     frame.color = np.clip(frame.color + np.float32(2e-3), 0, 1)
     c = compare_frames(reference, frame, epsilon=scene.render.epsilon)
     gates = failures(c, gates_against("float32"))
@@ -163,7 +166,8 @@ def test_the_float64_bounds_catch_a_depth_error_of_1e_8_and_a_colour_error_of_tw
     ulps (2**-23) on every colour fail the one-ulp bound."""
     name, scene, (width, height) = CASES[0]
     reference = reference_frame(scene, width, height, "float64")
-    frame = render(scene, width, height, backend="opencl", precision="float64")
+    frame = render(scene, width, height, backend="opencl", precision="float64",
+                   path_labels=True)
     frame.depth = frame.depth + 1e-8
     frame.color = np.clip(frame.color - np.float32(2.0 ** -23), 0, 1)
     c = compare_frames(reference, frame, epsilon=scene.render.epsilon)

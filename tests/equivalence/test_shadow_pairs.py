@@ -55,9 +55,9 @@ SCENES = {"classroom": lambda: load_scene("classroom"), "lights": lambda: load_s
 def render_one_ray(backend: str, scene, precision: str):
     """The one-ray program of ``backend`` (the opencl backend's default is the packet one)."""
     if backend == "opencl":
-        from reference_cpu import opencl
-        return opencl.render(scene, WIDTH, HEIGHT, precision, packets=False)
-    return render(scene, WIDTH, HEIGHT, backend=backend, precision=precision)
+        from gpu_shader import opencl
+        return opencl.render(scene, WIDTH, HEIGHT, precision, packets=False, path_labels=True)
+    return render(scene, WIDTH, HEIGHT, backend=backend, precision=precision, path_labels=True)
 
 
 @pytest.mark.parametrize("name", list(SCENES))

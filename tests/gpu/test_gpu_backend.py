@@ -45,8 +45,8 @@ def test_gpu_renders_in_float32_only():
 
 def test_gpu_frame_has_the_numpy_frames_buffers_dtypes_and_shapes(gpu):
     scene = ball_at(0.0, 0.0, radius=1.2)
-    frame = marchlab.render(scene, 40, 30, backend="gpu")
-    reference = marchlab.render(scene, 40, 30, precision="float32")
+    frame = marchlab.render(scene, 40, 30, backend="gpu", path_labels=True)
+    reference = marchlab.render(scene, 40, 30, precision="float32", path_labels=True)
     assert (frame.backend, frame.precision) == ("gpu", "float32")
     for name in ("color", "depth", "normal", "steps", "object_id", "hit", "path"):
         ours, theirs = getattr(frame, name), getattr(reference, name)
@@ -87,9 +87,9 @@ def test_progress_bands_draw_the_same_frame_as_one_draw(gpu):
     """
     marchlab.render(Scene(objects=(), camera=CAMERA), 40, 30, backend="gpu")
     reports = []
-    banded = marchlab.render(ball_at(0.3, -0.2), 40, 30, backend="gpu",
+    banded = marchlab.render(ball_at(0.3, -0.2), 40, 30, backend="gpu", path_labels=True,
                              progress=lambda done, total: reports.append((done, total)))
-    whole = marchlab.render(ball_at(0.3, -0.2), 40, 30, backend="gpu")
+    whole = marchlab.render(ball_at(0.3, -0.2), 40, 30, backend="gpu", path_labels=True)
     for name in ("color", "depth", "steps", "object_id", "hit", "path"):
         assert np.array_equal(getattr(banded, name), getattr(whole, name)), name
     done = [d for d, _ in reports]
@@ -304,8 +304,8 @@ def test_parameters_as_flat_varyings_or_a_private_copy_give_the_same_frame_to_th
     from scene_model.shapes import primitives
 
     scene = marchlab.load_scene(scene_name)
-    flat = generate(scene, 48, 36)
-    private = generate(scene, 48, 36, flat_rows=0)
+    flat = generate(scene, 48, 36, path_labels=True)
+    private = generate(scene, 48, 36, flat_rows=0, path_labels=True)
     rows = len(private.parameters) - 4 * len(list(primitives(scene.objects)))
     assert rows <= MAX_FLAT_ROWS
     if rows > gpu_render._renderer().flat_rows:

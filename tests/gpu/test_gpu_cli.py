@@ -129,7 +129,8 @@ def reference():
     """A numpy float32 frame of a ball in the middle of a 48x36 image."""
     scene = Scene(objects=(sphere(1.2),),
                   camera=Camera(position=(0.0, 0.0, 5.0), look_at=(0.0, 0.0, 0.0)))
-    return marchlab.render(scene, 48, 36, precision="float32"), scene.render.epsilon
+    return (marchlab.render(scene, 48, 36, precision="float32", path_labels=True),
+            scene.render.epsilon)
 
 
 def gate_names(lines: list[str]) -> list[str]:

@@ -14,6 +14,7 @@ import subprocess
 import sys
 from typing import ClassVar
 
+import numpy as np
 import pytest
 
 from gpu_shader.generate import generate
@@ -72,7 +73,7 @@ FEATURE_SWITCHES = {
                      set(), {"shadows:hard"}, set(), None),
     "fog": (["render.fog.density=0.1"], {"apply_fog"}, set(), {"fog"}, set(), None),
     "checker": (["materials.default.checker.scale=0.5"],
-                {"checker", "checker_parity", "surface_checker_parity"}, set(),
+                {"checker", "checker_parity"}, set(),
                 {"checker"}, set(), None),
     # A spot light is a point light limited to a cone, so it brings light_point along.
     "spot light": (["lights[0].type=spot"],
@@ -347,3 +348,36 @@ def test_hard_shadow_rays_are_paired_where_the_march_allows_and_nothing_unused_i
             assert len(re.findall(rf"\b{function}\s*\(", source)) >= 2, function   # called
     packets = generate(load_scene(name, overrides), WIDTH, HEIGHT, dialect="opencl-packets")
     assert not {"hard_shadow_pair", "lights_visible"} & defined_functions(packets.source)
+
+
+# --- path labels, only for the equivalence suite --------------------------------------------
+
+PATH_LABEL_CODE = {"path_step", "path", "features", "surface_checker_parity"}
+
+
+def code_words(source: str) -> set[str]:
+    """The identifiers of ``source`` outside // comments."""
+    return set(re.findall(r"\b\w+\b", re.sub(r"//[^\n]*", "", source)))
+
+
+@pytest.mark.parametrize("dialect", ["glsl", "opencl"])
+@pytest.mark.parametrize("name", ["classroom", "csg", "lights", "primitives", "repetition"])
+def test_a_program_has_no_path_label_code_unless_asked_for_it(name, dialect):
+    """A student's shader holds none of the path-label bookkeeping; asking for it adds the
+    label's hash, the features of each shading and the Pixel's path field."""
+    scene = load_scene(name)
+    plain = generate(scene, WIDTH, HEIGHT, dialect=dialect)
+    labelled = generate(scene, WIDTH, HEIGHT, dialect=dialect, path_labels=True)
+    assert not PATH_LABEL_CODE & code_words(plain.source)
+    assert {"path_step", "path", "features"} <= code_words(labelled.source)
+    assert (plain.path_labels, labelled.path_labels) == (False, True)
+
+
+@pytest.mark.parametrize("shading", ["steps", "normals", "depth", "phong"])
+def test_path_labels_change_no_parameter_row(shading):
+    """The labels are computed from what the program already has: the parameter block is
+    the same with and without them, so frames differ only in their path buffer."""
+    scene = load_scene("classroom", [f"render.shading={shading}"])
+    plain = generate(scene, WIDTH, HEIGHT)
+    labelled = generate(scene, WIDTH, HEIGHT, path_labels=True)
+    assert np.array_equal(plain.parameters, labelled.parameters)

@@ -77,7 +77,7 @@ VARIANTS = {
 
 def assert_uber_matches_specialised(scene: Scene, width: int, height: int):
     """The uber frame equals the specialised gpu frame (`assert_same_frame`)."""
-    specialised = marchlab.render(scene, width, height, backend="gpu")
+    specialised = marchlab.render(scene, width, height, backend="gpu", path_labels=True)
     uber = render_program(scene, uber_program(scene, width, height), width, height)
     assert_same_frame(uber, specialised)
 
@@ -130,7 +130,7 @@ def test_comparison_catches_a_sphere_one_percent_larger(gpu):
     assert grown[radius_row, 0] == 0.8
     grown[radius_row, 0] *= 1.01
     uber = render_program(scene, dataclasses.replace(program, parameters=grown), width, height)
-    specialised = marchlab.render(scene, width, height, backend="gpu")
+    specialised = marchlab.render(scene, width, height, backend="gpu", path_labels=True)
     with pytest.raises(AssertionError):
         assert_same_frame(uber, specialised)
 

@@ -41,8 +41,10 @@ class Renderer:
         return np.dtype(self.precision)
 
     def draw(self, scene, width: int, height: int) -> Frame:
-        """Render ``scene``, failing if any pixel's colour holds a NaN or an inf."""
-        frame = render(scene, width, height, backend=self.backend, precision=self.precision)
+        """Render ``scene`` (with path labels), failing if any pixel's colour holds a NaN or
+        an inf."""
+        frame = render(scene, width, height, backend=self.backend, precision=self.precision,
+                       path_labels=True)
         bad = ~np.isfinite(frame.color).all(axis=-1)
         assert not bad.any(), (f"{self}: {bad.sum()} pixels with a NaN or inf colour, first at "
                                f"(row, column) {tuple(np.argwhere(bad)[0])}")

@@ -25,7 +25,7 @@ import numpy as np
 import pytest
 
 from gpu_shader.dialects import PACKET_LANES
-from reference_cpu import opencl
+from gpu_shader import opencl
 from tests.equivalence.cases import all_cases
 
 CASES = all_cases()

@@ -1,0 +1,93 @@
+{# A template: gpu_shader/generate.py fills in the {{ }} and {% %} parts for one scene (Jinja). #}
+{% set shade = "shade_%s(p, n, -d, id)" % mode %}
+{% if not reflections %}
+// One pixel, from its camera ray to everything the Frame holds (reference_cpu/render.py,
+// Tracer.trace): the primary ray's march and, on a hit, the normal and object id there;
+// then its colour{{ " and path label" if path_labels }} from pixel_color.
+Pixel trace(vec3 origin, vec3 direction)
+{
+    Pixel px;
+    px.primary = march(origin, direction, MAX_DISTANCE);
+    px.normal = vec3(0.0);
+    px.id = -1;
+    if (px.primary.hit == 1) {
+        precise vec3 p = origin + px.primary.t * direction;
+        px.normal = estimate_normal(p);
+        px.id = scene_object_id(p);
+    }
+{% if path_labels %}
+    vec4 color_path = pixel_color(origin, direction, px.primary, px.normal, px.id);
+    px.color = color_path.xyz;
+    px.path = color_path.w;
+{% else %}
+    px.color = pixel_color(origin, direction, px.primary, px.normal, px.id);
+{% endif %}
+    return px;
+}
+{% else %}
+// One pixel, from its camera ray to everything the Frame holds (reference_cpu/render.py,
+// Tracer.trace and lit_color), with Whitted's mirror reflections. Each bounce marches its
+// ray, shades the hit and adds the colour weighted by the product of the kr seen so far; a
+// ray that hits nothing adds the background. Bounce 0 is the camera ray: its march, normal
+// and object id are the pixel's primary buffers. (The reference marches the camera ray
+// first, then loops; here the loop does it, so that llvmpipe, which runs every statement of
+// a loop body for a whole block of pixels, never runs a march or a normal twice.)
+Pixel trace(vec3 origin, vec3 direction)
+{
+    Pixel px;
+    px.normal = vec3(0.0);
+    px.id = -1;
+    vec3 color = vec3(0.0);
+{% if path_labels %}
+    uint path = 0u;
+{% endif %}
+    real weight = 1.0;
+    vec3 o = origin;
+    vec3 d = direction;
+    for (int bounce = 0; bounce <= REFLECTION_DEPTH; bounce++) {
+        Hit h = march(o, d, MAX_DISTANCE);
+        if (bounce == 0) {
+            px.primary = h;
+        }
+        if (h.hit == 0) {
+            color = color + weight * background(d);
+{% if path_labels %}
+            path = path_step(path, -1, 0u);
+{% endif %}
+            break;
+        }
+        precise vec3 p = o + h.t * d;
+        vec3 n = estimate_normal(p);
+        int id = scene_object_id(p);
+        if (bounce == 0) {
+            px.normal = n;
+            px.id = id;
+        }
+{% if path_labels %}
+        vec4 lit = {{ shade }};
+        vec3 shaded = lit.xyz;
+{% else %}
+        vec3 shaded = {{ shade }};
+{% endif %}
+{% if fog %}
+        shaded = apply_fog(shaded, h.t, FOG_COLOR, FOG_DENSITY);
+{% endif %}
+        color = color + weight * shaded;
+{% if path_labels %}
+        path = path_step(path, id, uint(lit.w));
+{% endif %}
+        weight = weight * MATERIAL(id, 1).w;
+        if (bounce == REFLECTION_DEPTH || !(weight > 0.0)) {
+            break;
+        }
+        // Continue just off the mirror, in the mirrored direction.
+        o = p + SURFACE_OFFSET * n;
+        d = reflect(d, n);
+    }
+    px.color = color;
+{% if path_labels %}
+    px.path = real(path);
+{% endif %}
+    return px;
+}
+{% endif %}
