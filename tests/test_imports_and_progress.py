@@ -5,7 +5,7 @@ import subprocess
 import sys
 import time
 
-from marchlab import cli
+from marchlab.commands import progress_bar
 
 BACKEND_MODULES = ("reference_cpu", "gpu_shader", "moderngl", "pyopencl", "embreex")
 
@@ -19,7 +19,8 @@ def loaded_after(code: str) -> list[str]:
 
 
 def test_importing_marchlab_and_its_cli_loads_no_backend():
-    code = "import marchlab, marchlab.cli, marchlab.compare, scene_model.builder"
+    code = ("import marchlab, marchlab.cli, marchlab.commands, marchlab.compare, "
+            "scene_model.builder")
     assert loaded_after(code) == []
 
 
@@ -38,10 +39,10 @@ class FakeTerminal(io.StringIO):
 
 
 def run_progress(monkeypatch, tty: bool, seconds: float) -> str:
-    """Drive cli.progress_bar like a render of 4 blocks lasting ``seconds``; return stderr."""
+    """Drive progress_bar like a render of 4 blocks lasting ``seconds``; return stderr."""
     stderr = FakeTerminal(tty)
     monkeypatch.setattr(sys, "stderr", stderr)
-    with cli.progress_bar(4000) as progress:
+    with progress_bar(4000) as progress:
         for done in (1000, 2000, 3000, 4000):
             time.sleep(seconds / 4)
             if progress is not None:

@@ -1,0 +1,251 @@
+"""What each ``marchlab`` command does, once `marchlab.cli` has parsed its arguments.
+
+One function per command, ``cmd_NAME(args) -> exit code``: each loads the scene, calls the
+toolkit (`marchlab.render`, `marchlab.compare`, `marchlab.simulation`, the ground truth, the
+accuracy report) and writes or prints the result. A user error raises `MarchlabError`, which
+`marchlab.cli.main` turns into one line on stderr; backends are imported only when a command
+needs one.
+"""
+
+from __future__ import annotations
+
+import io
+import sys
+import tempfile
+import time
+from contextlib import contextmanager
+from pathlib import Path
+
+from scene_model.errors import MarchlabError, SceneError
+from scene_model.files import write_atomically
+from scene_model.scene import rendered_scene, scene_at
+from scene_model.scenefile import bundled_scene_names, load_scene, scene_to_toml
+
+from .render import BACKENDS, backend_problem, render
+
+OUTPUT_SUFFIXES = (".png", ".npz")
+
+
+def cmd_render(args) -> int:
+    """``marchlab render``: one frame of a scene to a PNG (one buffer) or an .npz (all)."""
+    output = Path(args.output) if args.output else Path(f"{Path(args.scene).stem}.png")
+    if output.suffix.lower() not in OUTPUT_SUFFIXES:
+        raise MarchlabError(f"{output}: unsupported output format {output.suffix!r} "
+                            "(use .png or .npz)")
+    scene = load_scene(args.scene, args.set)
+    width, height = args.size
+    start = time.perf_counter()
+    with progress_bar(width * height) as progress:
+        frame = render(scene, width, height, backend=args.backend, precision=args.precision,
+                       progress=progress)
+    seconds = time.perf_counter() - start
+    try:
+        output.parent.mkdir(parents=True, exist_ok=True)
+        frame.save(output, aov=args.aov)
+    except OSError as err:
+        raise MarchlabError(f"{output}: cannot write: {err.strerror}") from None
+    print(f"wrote {output} ({width}x{height}, {args.backend} {frame.precision}, "
+          f"{seconds:.2f} s)")
+    return 0
+
+
+@contextmanager
+def progress_bar(total: int, unit: str = "px"):
+    """A progress callback drawing a bar on stderr, shown only on a terminal after 1 s."""
+    if not sys.stderr.isatty():
+        yield None
+        return
+    from tqdm import tqdm
+    with tqdm(total=total, unit=unit, unit_scale=unit == "px", delay=1.0, leave=False,
+              file=sys.stderr) as bar:
+        yield lambda done, _total: bar.update(done - bar.n)
+
+
+def cmd_scenes(args) -> int:
+    """``marchlab scenes``: the bundled scenes, one line each with its description."""
+    names = bundled_scene_names()
+    width = max(map(len, names))
+    for name in names:
+        print(f"{name:<{width}}  {load_scene(name).description}")
+    return 0
+
+
+def cmd_show(args) -> int:
+    """``marchlab show``: the scene, overrides applied, as the TOML of a scene file."""
+    print(scene_to_toml(load_scene(args.scene, args.set)), end="")
+    return 0
+
+
+def cmd_shader(args) -> int:
+    """``marchlab shader``: the program generated for a scene, as a backend compiles it."""
+    scene = load_scene(args.scene, args.set)
+    from gpu_shader.generate import generate     # no OpenGL needed to generate
+    source = generate(rendered_scene(scene), 640, 480, dialect=args.dialect,
+                      precision=args.precision).source
+    if args.numbered:
+        lines = source.splitlines()
+        width = len(str(len(lines)))
+        source = "".join(f"{i:>{width}}  {line}\n" for i, line in enumerate(lines, 1))
+    print(source, end="")
+    return 0
+
+
+def cmd_compare(args) -> int:
+    """``marchlab compare``: two backends' frames against the gates; exit 1 if one fails."""
+    from .compare import compare_frames, failures, gates_against, write_difference_images
+    scene = load_scene(args.scene, args.set)
+    width, height = args.size
+    b_precision = args.b_precision or BACKENDS[args.b].precisions[0]
+    a_precision = args.a_precision or (
+        b_precision if b_precision in BACKENDS[args.a].precisions else None)
+    # Path labels tell the gates where either image may jump (marchlab.compare).
+    a = render(scene, width, height, backend=args.a, precision=a_precision, path_labels=True)
+    b = render(scene, width, height, backend=args.b, precision=b_precision, path_labels=True)
+    c = compare_frames(a, b, epsilon=scene.render.epsilon)
+    gates = gates_against(a.precision)
+    failed = failures(c, gates)
+    print(f"{args.scene}: {args.b} {b.precision} against {args.a} {a.precision}, "
+          f"{width}x{height}")
+    rows = c.rows()
+    name_width = max(len(name) for name, _ in rows)
+    for name, value in rows:
+        print(f"  {name:<{name_width}}  {value}")
+    if args.save:
+        for path in write_difference_images(a, b, gates, Path(args.save)):
+            print(f"wrote {path}")
+    for line in failed:
+        print(f"FAIL {line}")
+    print("PASS" if not failed else f"FAIL ({len(failed)} gates)")
+    return 1 if failed else 0
+
+
+def cmd_simulate(args) -> int:
+    """``marchlab simulate``: step the scene's bodies, render each frame, write a GIF or MP4."""
+    from physics import PhysicsError
+    from .animation import FORMATS, gif_bytes, mp4_problem, write_mp4
+    from .simulation import frame_plan, physics_settings, simulate_scene
+    output = Path(args.output) if args.output else Path(f"{Path(args.scene).stem}.gif")
+    kind = output.suffix.lower()
+    if kind not in FORMATS:
+        raise MarchlabError(f"{output}: unsupported output format {output.suffix!r} "
+                            "(use .gif or .mp4)")
+    if kind == ".mp4" and mp4_problem():
+        raise MarchlabError(f"{output}: {mp4_problem()}")
+    scene = load_scene(args.scene, args.set)
+    if not scene.bodies:
+        raise MarchlabError(f"{args.scene}: has no [[bodies]] to simulate")
+    backend = args.backend or ("gpu" if backend_problem("gpu") is None else "numpy")
+    if args.backend and backend_problem(backend):
+        raise MarchlabError(f"the {backend} backend cannot run here: {backend_problem(backend)}")
+
+    # The step is the scene's fixed dt; the frame rate only says how often to look.
+    dt = physics_settings(scene).dt
+    plan = frame_plan(dt, args.fps, args.seconds)
+    if not plan.exact:
+        print(f"marchlab: note: 1/fps = {1 / args.fps:.6g} s is not a multiple of dt = "
+              f"{dt:.6g} s; a frame every {plan.record_every} steps ({plan.frame_seconds:.6g} s "
+              "of simulated time)", file=sys.stderr)
+    start = time.perf_counter()
+    try:
+        trajectory = simulate_scene(scene, plan)
+    except SceneError as err:
+        raise err.in_file(args.scene) from None
+    except PhysicsError as err:
+        raise MarchlabError(f"{args.scene}: physics: {err}") from None
+
+    width, height = args.size
+    images = render_frames(scene, trajectory.positions, width, height, backend)
+
+    try:
+        for path in (output, Path(args.csv) if args.csv else None):
+            if path is not None:
+                path.parent.mkdir(parents=True, exist_ok=True)
+        if kind == ".gif":
+            write_atomically(output, gif_bytes(images, plan.frame_seconds))
+        else:
+            write_mp4(output, images, 1 / plan.frame_seconds)
+        if args.csv:
+            write_atomically(args.csv, trajectory_csv(trajectory))
+    except OSError as err:
+        raise MarchlabError(f"{err.filename or output}: cannot write: {err.strerror}") from None
+    seconds = time.perf_counter() - start
+    print(f"wrote {output} ({plan.frames} frames of {width}x{height} from t = 0 to "
+          f"{plan.steps * dt:.6g} s, {plan.steps} steps of dt = {dt:.6g} s, {backend}, "
+          f"{seconds:.2f} s)")
+    if args.csv:
+        print(f"wrote {args.csv} ({len(trajectory.times)} records of "
+              f"{trajectory.positions.shape[1]} bodies)")
+    return 0
+
+
+def cmd_truth(args) -> int:
+    """``marchlab truth``: depth, normal and hit without sphere tracing, to an .npz file."""
+    import numpy as np
+    output = Path(args.output) if args.output else Path(f"{Path(args.scene).stem}-truth.npz")
+    if output.suffix.lower() != ".npz":
+        raise MarchlabError(f"{output}: unsupported output format {output.suffix!r} (use .npz)")
+    scene = load_scene(args.scene, args.set)
+    from reference_cpu.truth import ground_truth
+    width, height = args.size
+    start = time.perf_counter()
+    try:
+        truth = ground_truth(scene, width, height, method=args.method,
+                             resolution=args.resolution)
+    except SceneError as err:
+        raise err.in_file(args.scene) from None
+    seconds = time.perf_counter() - start
+    buffer = io.BytesIO()
+    np.savez_compressed(buffer, **truth.arrays())
+    try:
+        output.parent.mkdir(parents=True, exist_ok=True)
+        write_atomically(output, buffer.getvalue())
+    except OSError as err:
+        raise MarchlabError(f"{output}: cannot write: {err.strerror}") from None
+    print(f"wrote {output} ({width}x{height}, {args.method}: {int(truth.hit.sum())} of "
+          f"{width * height} pixels hit, error bound {truth.error_bound:.3g}, measured "
+          f"|sdf| max {truth.measured_error:.3g}, p99 {truth.measured_error_p99:.3g}; "
+          f"{seconds:.2f} s)")
+    return 0
+
+
+def cmd_bench_accuracy(args) -> int:
+    """``marchlab bench accuracy``: the speed-against-error report and its plots."""
+    from .accuracy_report import run
+    output = Path(args.output)
+    if output.suffix.lower() != ".md":
+        raise MarchlabError(f"{output}: the report is Markdown (use a .md file)")
+    images = Path(args.images) if args.images else output.parent / "images"
+    command = " ".join(["marchlab", "bench", "accuracy"] + sys.argv[3:]) if len(
+        sys.argv) > 2 else "marchlab bench accuracy"
+    try:
+        written = run(output, images, args.size, args.repeat, command, args.quick,
+                      echo=lambda line: print(line, file=sys.stderr, flush=True))
+    except OSError as err:
+        raise MarchlabError(f"{err.filename or output}: cannot write: {err.strerror}") from None
+    for path in written:
+        print(f"wrote {path}")
+    return 0
+
+
+def render_frames(scene, positions, width: int, height: int, backend: str) -> list:
+    """One 8-bit RGB image (H, W, 3) per row of ``positions`` (T, N, 3), with a progress bar.
+
+    Only the bodies' positions change from frame to frame, so the GPU backend compiles its
+    program for the first frame and reuses it for the others.
+    """
+    images = []
+    with progress_bar(len(positions), unit="frame") as progress:
+        for index, centres in enumerate(positions):
+            frame = render(scene_at(scene, centres), width, height, backend=backend)
+            images.append(frame.image("color"))
+            if progress:
+                progress(index + 1, len(positions))
+    return images
+
+
+def trajectory_csv(trajectory) -> bytes:
+    """The bytes `physics.Trajectory.to_csv` writes (so the file can be written atomically)."""
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / "trajectory.csv"
+        trajectory.to_csv(path)
+        return path.read_bytes()
