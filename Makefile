@@ -20,9 +20,13 @@ demo: $(VENV)/.installed
 	$(BIN)/marchlab render classroom -o out/classroom.png
 
 # lint-imports checks the four floors (pyproject.toml, [tool.importlinter]) before the suite.
+# The backends named here must run: a test that would skip for one fails instead, naming it
+# (tests/required_backends.py). Without their drivers: make test MARCHLAB_REQUIRE_BACKENDS=
+MARCHLAB_REQUIRE_BACKENDS := gpu,opencl
+
 test: $(VENV)/.installed-test
 	$(BIN)/lint-imports
-	$(BIN)/python -m pytest
+	MARCHLAB_REQUIRE_BACKENDS=$(MARCHLAB_REQUIRE_BACKENDS) $(BIN)/python -m pytest
 
 # The test environment holds the docs extra and everything the lessons import, which the
 # site executes (sphinx-build -D nb_execution_mode=off skips that, as tests/test_docs_site.py does).

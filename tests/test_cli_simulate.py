@@ -15,9 +15,9 @@ import pytest
 from PIL import Image, ImageSequence
 
 from marchlab.animation import gif_durations
-from marchlab.render import backend_problem
 
 from cli_helpers import assert_one_line_error, leftovers, run_cli, run_marchlab
+from required_backends import need_backend
 
 SIZE = "32x24"
 QUICK = ("--seconds", "0.5", "--fps", "10", "--size", SIZE)       # 5 frames, t = 0 to 0.4 s
@@ -50,8 +50,8 @@ def test_numpy_backend_writes_the_same_frame_count(tmp_path, capsys):
         assert image.n_frames == 5
 
 
-@pytest.mark.skipif(backend_problem("gpu") is not None, reason="no GPU backend here")
 def test_gpu_and_numpy_frames_agree_to_a_few_levels(tmp_path, capsys):
+    need_backend("gpu")
     # GIF palettes are chosen per frame, so only a loose bound: most pixels within 8 levels.
     paths = {backend: tmp_path / f"{backend}.gif" for backend in ("gpu", "numpy")}
     for backend, path in paths.items():

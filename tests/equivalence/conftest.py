@@ -2,7 +2,9 @@
 
 ``backend`` runs a test body once for every candidate backend marchlab knows (every backend
 but the NumPy reference). A backend this machine cannot run is skipped with the reason the
-backend itself gives (say, no OpenGL context), never passed silently.
+backend itself gives (say, no OpenGL context), never passed silently; where
+``MARCHLAB_REQUIRE_BACKENDS`` names it (``make test``), its tests fail instead
+(tests/required_backends.py).
 
 References are rendered once per (scene, size, precision) and shared by every test and
 backend that needs them. At the end of the run a table of PSNR and SSIM per case is printed:
@@ -11,12 +13,11 @@ they are trends to watch, not gates.
 
 from __future__ import annotations
 
-import functools
-
 import pytest
 
 from marchlab import render
-from marchlab.render import BACKENDS, backend_problem
+from marchlab.render import BACKENDS
+from required_backends import need_backend
 from scene_model.scenefile import scene_to_toml
 
 CANDIDATES = [name for name in BACKENDS if name != "numpy"]
@@ -26,16 +27,9 @@ TRENDS: list[tuple[str, str, str, float, float]] = []   # case, backend, referen
 
 @pytest.fixture(params=CANDIDATES)
 def backend(request) -> str:
-    """The name of a backend that can run here; skipped, with its reason, if it cannot."""
-    problem = _problem(request.param)
-    if problem:
-        pytest.skip(f"{request.param} backend unavailable: {problem}")
+    """The name of a backend that can run here; skipped (or failed, if required) if not."""
+    need_backend(request.param)
     return request.param
-
-
-@functools.cache
-def _problem(name: str) -> str | None:
-    return backend_problem(name)
 
 
 _REFERENCES: dict[tuple, object] = {}

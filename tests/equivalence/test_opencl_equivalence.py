@@ -18,7 +18,7 @@ opencl float64 against numpy float64
     3. colour within 2**-24 on the interior. `Frame.color` is float32 at either precision, and
        two float64 computations that differ by the few float64 ulps OpenCL allows its maths
        functions (and fused multiply-adds) round to the same float32 or to its neighbour: at
-       most one float32 ulp, which is 2**-24 = 6.0e-8 for a colour in [0, 1]. The issue's
+       most one float32 ulp, which is 2**-24 = 6.0e-8 for a colour in [0, 1]. A looser
        1e-6 would let through a kernel that shaded in float32 (the float32 pair differs by up
        to 6e-7 where both hit); anything above one ulp means a different computation.
 
@@ -44,7 +44,7 @@ from gpu_shader.opencl import device as opencl_device
 from marchlab import render
 from marchlab.compare import (Comparison, Gates, compare_frames, failures, gates_against,
                               write_difference_images)
-from marchlab.render import backend_problem
+from required_backends import need_backend
 
 from .cases import all_cases
 from .conftest import reference_frame
@@ -59,10 +59,9 @@ COLOR_FLOAT64 = 2.0 ** -24     # one float32 ulp of a colour in [0.5, 1], the la
 
 @pytest.fixture(scope="module")
 def opencl() -> None:
-    """Skip, with the backend's own reason, where the opencl backend cannot run."""
-    problem = backend_problem("opencl")
-    if problem:
-        pytest.skip(f"opencl backend unavailable: {problem}")
+    """Skip, with the backend's own reason, where the opencl backend cannot run (or fail,
+    where it is required)."""
+    need_backend("opencl")
 
 
 @pytest.fixture(scope="module")

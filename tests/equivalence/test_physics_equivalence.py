@@ -19,25 +19,18 @@ import functools
 import numpy as np
 import pytest
 
-from marchlab.render import backend_problem
 from marchlab.simulation import simulate
 import physics
+from required_backends import need_backend
 
-DT = 1 / 120                   # the 5 s with half the steps of the default 1/240
+DT = 1 / 120                   # 5 s with half the steps of the default 1/240
 RADIUS = 0.1
 RESTITUTIONS = (0.0, 0.5, 0.9, 1.0)
 
 
-@functools.cache
-def _gpu_problem() -> str | None:
-    return backend_problem("gpu")
-
-
 @pytest.fixture(autouse=True)
 def _needs_gpu():
-    problem = _gpu_problem()
-    if problem is not None:
-        pytest.skip(f"gpu backend unavailable: {problem}")
+    need_backend("gpu")
 
 
 def quiet_scenes(dtype, integrator="semi_implicit") -> physics.World:

@@ -3,11 +3,13 @@
 Frames are compared with the NumPy reference in float32: same buffers, same dtypes, rows
 top-first, hit masks equal but for a few silhouette pixels. Every test that draws takes the
 ``gpu`` fixture (tests/gpu/conftest.py) and is skipped, with the reason, on a machine without
-a usable EGL context; the error-message tests of the context need no GPU either way.
+a usable EGL context (failed where ``MARCHLAB_REQUIRE_BACKENDS`` names gpu); the
+error-message tests of the context need no GPU either way.
 """
 
 from __future__ import annotations
 
+import importlib.util
 import math
 
 import numpy as np
@@ -20,6 +22,7 @@ import gpu_shader.render as gpu_render
 from marchlab import MarchlabError
 import marchlab
 from marchlab.render import backend_problem
+from required_backends import need_backend
 from scene_model.builder import Camera, Scene, sphere
 
 # A camera on the z axis looking down -z: image row 0 is the top, x grows to the right.
@@ -149,7 +152,12 @@ def test_compile_error_of_one_line_source_quotes_line_1(gpu):
 
 @pytest.fixture
 def moderngl_module():
-    return pytest.importorskip("moderngl", reason="the gpu backend needs moderngl")
+    """moderngl, for tests that make contexts of their own. Without it the gpu backend cannot
+    run either, so `need_backend` skips the test (or fails it, where gpu is required)."""
+    if importlib.util.find_spec("moderngl") is None:
+        need_backend("gpu")
+    import moderngl
+    return moderngl
 
 
 @pytest.fixture

@@ -1,17 +1,18 @@
-"""Fixtures and analytic helpers of the hard cases (issue 6).
+"""Fixtures and analytic helpers of the hard cases.
 
 ``renderer`` runs a test body once for every (backend, precision) pair marchlab offers
 (`marchlab.render.BACKENDS`): numpy in float64 and float32, gpu in float32, opencl in float32
 and float64. A pair this machine cannot run is skipped with the backend's own reason (no EGL
-context, no OpenCL device, a device without float64), never passed silently.
+context, no OpenCL device, a device without float64), never passed silently; a backend named
+in ``MARCHLAB_REQUIRE_BACKENDS`` fails instead (tests/required_backends.py).
 
-Every frame drawn through `Renderer.draw` is checked for NaN and inf in its colour: the
-issue asks that none reach a colour on any backend in any hard case, so each hard case that
-renders checks it on every frame it draws.
+Every frame drawn through `Renderer.draw` is checked for NaN and inf in its colour: none may
+reach a colour on any backend in any hard case, so each hard case that renders checks it on
+every frame it draws.
 
 ``report(what, value)`` records a number a hard case measured (a difference quotient, an
-error growth); they are printed at the end of the run, as the issue asks for some of them
-to be reported rather than only bounded.
+error growth); they are printed at the end of the run, so that a reader sees the measured
+values, not only that they stayed within their bounds.
 """
 
 from __future__ import annotations
@@ -23,7 +24,8 @@ import numpy as np
 import pytest
 
 from marchlab import render
-from marchlab.render import BACKENDS, backend_problem
+from marchlab.render import BACKENDS
+from required_backends import need_backend
 from scene_model.frame import Frame
 
 RENDERERS = [(name, precision) for name, backend in BACKENDS.items()
@@ -75,11 +77,8 @@ def pytest_terminal_summary(terminalreporter):
 
 
 @functools.cache
-def renderer_problem(backend: str, precision: str) -> str | None:
-    """Why this pair cannot render here (one line), or None."""
-    problem = backend_problem(backend)
-    if problem:
-        return f"{backend} backend unavailable: {problem}"
+def precision_problem(backend: str, precision: str) -> str | None:
+    """Why a backend that runs here cannot run at ``precision`` (one line), or None."""
     if backend == "opencl" and precision == "float64":
         from gpu_shader.opencl import device
         if not device().fp64:
@@ -89,11 +88,14 @@ def renderer_problem(backend: str, precision: str) -> str | None:
 
 @pytest.fixture(params=RENDERERS, ids=[f"{b}-{p}" for b, p in RENDERERS])
 def renderer(request) -> Renderer:
-    """A (backend, precision) pair that can render here; skipped, with its reason, if not."""
-    problem = renderer_problem(*request.param)
+    """A (backend, precision) pair that can render here; skipped, with its reason, if not
+    (a missing backend fails instead where it is required)."""
+    backend, precision = request.param
+    need_backend(backend)
+    problem = precision_problem(backend, precision)
     if problem:
         pytest.skip(problem)
-    return Renderer(*request.param)
+    return Renderer(backend, precision)
 
 
 @pytest.fixture(params=["float64", "float32"])

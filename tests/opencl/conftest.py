@@ -2,7 +2,8 @@
 
 Tests that compute on a real device take the ``opencl_device`` fixture, which skips them,
 saying why, where `marchlab.render.backend_problem("opencl")` finds no pyopencl or no
-OpenCL device that builds a kernel. Tests of the generated text and of device selection
+OpenCL device that builds a kernel (or fails them where ``MARCHLAB_REQUIRE_BACKENDS`` names
+opencl: tests/required_backends.py). Tests of the generated text and of device selection
 use fakes and never skip.
 """
 
@@ -11,18 +12,11 @@ from __future__ import annotations
 import pytest
 
 import gpu_shader.opencl as opencl
-from marchlab.render import backend_problem
-
-
-@pytest.fixture(scope="session")
-def opencl_problem() -> str | None:
-    """Why the opencl backend cannot run here (one line), or None if it can."""
-    return backend_problem("opencl")
+from required_backends import need_backend
 
 
 @pytest.fixture
-def opencl_device(opencl_problem) -> opencl.Device:
-    """The device the backend computes on; skips the test if there is none."""
-    if opencl_problem is not None:
-        pytest.skip(f"opencl backend unavailable here: {opencl_problem}")
+def opencl_device() -> opencl.Device:
+    """The device the backend computes on; skips the test if there is none (fails if required)."""
+    need_backend("opencl")
     return opencl.device()
