@@ -25,7 +25,7 @@ pytest.importorskip("sphinx", reason="the docs extra is not installed: pip insta
 pytest.importorskip("myst_nb", reason="the docs extra is not installed: pip install -e '.[docs]'")
 
 ROOT = Path(__file__).resolve().parent.parent
-PACKAGES = ("marchlab", "reference_cpu", "physics", "gpu_shader")
+PACKAGES = ("scene_model", "marchlab", "reference_cpu", "physics", "gpu_shader")
 MATHS = ("sphere-tracing", "phong", "shadows", "reflections", "impulses", "equivalence")
 
 

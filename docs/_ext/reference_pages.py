@@ -19,7 +19,7 @@ from docutils.statemachine import StringList
 from sphinx.util.docutils import SphinxDirective
 
 ROOT = Path(__file__).resolve().parent.parent.parent
-PACKAGES = ("marchlab", "reference_cpu", "physics", "gpu_shader")
+PACKAGES = ("scene_model", "physics", "reference_cpu", "gpu_shader", "marchlab")
 
 
 # --- generated Markdown, parsed in place ------------------------------------------------------
