@@ -1,11 +1,11 @@
-"""Each faster-marching setting on every backend, side by side in one run (issues 3, 4, 6).
+"""Each faster-marching setting on every backend, side by side in one run.
 
     python benchmarks/bench_marching.py [--scene classroom] [--size 640x480]
 
 Renders the scene with plain sphere tracing, automatic over-relaxation, bounding spheres and
 both, on gpu, opencl and numpy at each precision. Prints the median and best time per frame
-and the mean steps per pixel of each, then the ratios issue 4 asks about: opencl against
-numpy at the same precision, and opencl against gpu. Results and the command are in
+and the mean steps per pixel of each, then the ratios docs/performance.md sets targets for:
+opencl against numpy at the same precision, and opencl against gpu. Results and the command are in
 docs/performance.md.
 """
 

@@ -32,7 +32,7 @@ exclude_patterns = ["_build", "_ext", "**/.ipynb_checkpoints", "Thumbs.db", ".DS
 
 # --- MyST ---------------------------------------------------------------------------------------
 myst_enable_extensions = ["dollarmath", "amsmath", "colon_fence", "deflist"]
-myst_heading_anchors = 4        # links such as performance.md#physics-cpu-issue-5 work as on GitHub
+myst_heading_anchors = 4        # links such as performance.md#physics-cpu work as on GitHub
 
 # --- notebooks (the lessons) --------------------------------------------------------------------
 # `make docs` runs every lesson so the site shows what the current code prints and draws; the

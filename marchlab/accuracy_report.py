@@ -106,7 +106,7 @@ def truth_table(truths: dict[str, SceneTruth]) -> str:
 
 
 def fewer_steps_table(rows: list[Row], truths: dict | None = None) -> str:
-    """Issue 6's goal per scene, NumPy float64 at epsilon 1e-3: steps saved by auto
+    """The faster-marching goal per scene, NumPy float64 at epsilon 1e-3: steps saved by auto
     relaxation and auto + bounding spheres against plain sphere tracing, the pixels whose
     hit/miss changed (and how many are wrong against the truth), and the surface error."""
     truths = truths or {}
@@ -255,7 +255,7 @@ def write_report(rows: list[Row], markdown, image_dir, command: str, size, repea
             f"In this run {marked} of {len(rows)} rows have an error marked {MARK}."]
     if truths:
         out += ["", "## The truth of each scene", "", *TRUTH_NOTES, "", truth_table(truths)]
-    out += ["## Fewer steps, same surface (issue 6's goal)", "",
+    out += ["## Fewer steps, same surface", "",
             "Mean SDF evaluations per pixel saved against plain sphere tracing at epsilon "
             "1e-3 (NumPy float64; the goal is at least 25% with the hit mask unchanged and "
             "the surface within epsilon). *hit/miss changed* counts the pixels whose hit/miss "
@@ -279,7 +279,7 @@ def write_report(rows: list[Row], markdown, image_dir, command: str, size, repea
                 "The gpu backend generates a shader holding only what the scene uses. The "
                 "uber shader (`gpu_shader/uber.py`) is one text for every scene: all "
                 "primitives, lights, shading modes and features, chosen at run time by "
-                "values in the parameter block (source 002 measured the same trade-off). "
+                "values in the parameter block. "
                 "Same images (tests/gpu/test_uber_shader.py); times side by side:", "",
                 "| scene | specialised ms | uber ms | uber / specialised | compile ms "
                 "(specialised, uber) |", "| --- | ---: | ---: | ---: | ---: |"]

@@ -68,7 +68,7 @@ def written_out(node, eye, reach: float):
 
     Parameters
     ----------
-    node : Node
+    node : scene_model.shapes.Node
     eye : (3,) ndarray
         The camera position in ``node``'s frame.
     reach : float

@@ -59,7 +59,8 @@ class Comparison:
 
 @dataclass(frozen=True)
 class Gates:
-    """The limits a backend must meet against the reference (issue 3's statistics 1-3)."""
+    """The limits a backend must meet against the reference: coverage, interior and display
+    (docs/equivalence.md, "The gates")."""
     coverage_fraction: float = 0.0005     # hit flags may differ on at most 0.05% of pixels
     depth_excess: float = 1.0             # |dt| <= max(2 epsilon, 1e-5 t)
     normal_degrees: float = 0.5

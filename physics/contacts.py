@@ -92,8 +92,9 @@ def spread_coincident(existing, new, distance, rng) -> np.ndarray:
     """Move each of the ``new`` centres (M, 3) that equals an earlier centre (of ``existing``
     (N, 3) or of ``new``) by ``distance`` (M,) in a direction drawn from ``rng``; returns them.
 
-    Source 000 moves a sphere spawned on another this way, unseeded; with a seeded generator
-    the pair separates the same way on every run.
+    Two equal centres have no direction between them (their contact would fall back to
+    FALLBACK_NORMAL, the same for every such pair), so one is moved off in a random direction;
+    with a seeded generator the pair separates the same way on every run.
     """
     new = new.copy()
     while True:

@@ -114,8 +114,8 @@ class World:
 
         Returns their indices, (M,) int. A sphere whose centre is exactly that of another is
         moved by SPAWN_OFFSET radii in a random direction drawn from the world's seeded
-        generator (source 000 does the same, unseeded), so the pair separates the same way
-        every run with the same seed.
+        generator, so the pair separates the same way every run with the same seed (two equal
+        centres have no direction between them to push along).
         """
         positions = rows(positions, "position")
         m = len(positions)

@@ -1,7 +1,7 @@
 """Bounding-sphere culling: which objects can a ray reach at all?
 
-Source 000 made its scenes fast with ``intersectsBoundingVolume``: before marching a ray, test
-it against each object's bounding sphere, and leave the objects it misses out of the scene's
+Ray tracers have used bounding spheres since Whitted 1980: before marching a ray, test it
+against each object's bounding sphere, and leave the objects it misses out of the scene's
 distance for that whole march. Sphere tracing stays safe: the distance to the objects left in
 is still a bound on how far the ray may go before it meets any of them, and the ray can meet
 none of the others. Left out, a far object no longer holds a passing ray back, so rays that
@@ -69,11 +69,12 @@ def culled_bounds(objects, epsilon: float) -> list[tuple[int, np.ndarray, float]
 
 
 def ray_meets_sphere(origins, directions, centre, radius):
-    """Does the ray o + t d, t >= 0, touch the sphere? (source 000's bounding-volume test)
+    """Does the ray o + t d, t >= 0, touch the sphere? (Ericson 2005, section 5.3.2)
 
     With oc = o - c, b = oc . d and c' = |oc|^2 - r^2, the ray's line meets the sphere where
-    t^2 + 2 b t + c' = 0 has real roots (b^2 - c' >= 0). Source 000 stops there; a ray also
-    needs a root at t >= 0: it starts inside (c' <= 0), or the sphere lies ahead (b <= 0).
+    t^2 + 2 b t + c' = 0 has real roots (b^2 - c' >= 0). That alone also accepts a sphere
+    behind the ray; a ray needs a root at t >= 0: it starts inside (c' <= 0), or the sphere
+    lies ahead (b <= 0). Ericson's ``TestRaySphere`` makes the same two tests.
 
     Parameters
     ----------

@@ -2,7 +2,7 @@
 
 Point and spot lights fade with distance as 1 / (K_c + K_l d + K_q d^2); a spot light also fades
 from its inner to its outer cone, clamp((cos theta - cos outer) / (cos inner - cos outer), 0, 1)
-(source 003, after LearnOpenGL's "Light casters"). A directional light is the same everywhere.
+(LearnOpenGL, "Light casters"). A directional light is the same everywhere.
 """
 
 from __future__ import annotations

@@ -3,13 +3,14 @@
 The lit models take the light arriving at each point (``incoming``: one ``(L, radiance)`` pair
 per light, radiance already multiplied by attenuation and shadow) and return linear RGB.
 
-Phong (source 000, after Phong 1975)::
+Phong (Phong 1975)::
 
     I = ka albedo i_a + sum_m radiance_m (kd max(N.L_m, 0) albedo + ks max(R_m.V, 0)^alpha)
 
 with R_m = reflect(-L_m, N) and V the unit vector toward the eye. Blinn-Phong replaces R.V by
-N.H with H = normalize(L + V). Specular light is not tinted by the albedo (as in source 000),
-and it is zero where N.L <= 0 so that a light behind a surface cannot make a highlight on it.
+N.H with H = normalize(L + V) (Blinn 1977). Specular light is not tinted by the albedo (the
+highlight has the light's colour, as in Phong 1975: a plastic, not a metal), and it is zero
+where N.L <= 0 so that a light behind a surface cannot make a highlight on it.
 """
 
 from __future__ import annotations
@@ -38,7 +39,11 @@ class Surface:
 
 
 def reflect(d, n):
-    """Mirror direction of ``d`` about the normal ``n``: d - 2 (d.n) n (source 000's derivation)."""
+    """Mirror direction of ``d`` about the normal ``n``: d - 2 (d.n) n (Whitted 1980).
+
+    Split d into its part along n, (d.n) n, and the rest; the mirror keeps the rest and flips
+    the part along n.
+    """
     return d - 2 * dot(d, n)[:, None] * n
 
 
@@ -70,7 +75,11 @@ def shade_blinn_phong(s: Surface, incoming, ambient):
 
 
 def shade_toon(s: Surface, incoming, ambient, bands):
-    """Phong with the diffuse and specular terms quantised into ``bands`` levels (sources 002, 003)."""
+    """Phong with the diffuse and specular terms quantised into ``bands`` levels.
+
+    Toon (cel) shading: Lake et al. 2000 look the diffuse term up in a texture of a few flat
+    tones; here both terms go through `toon_band`.
+    """
     return _lit(s, incoming, ambient, lambda x: toon_band(x, bands), specular_phong)
 
 
@@ -103,12 +112,12 @@ def smoothstep(edge0, edge1, x):
 
 
 def shade_normals(normal):
-    """|N| as a colour (source 003's "colourful" shader): x red, y green, z blue."""
+    """|N| as a colour, a common debugging view of normals: x red, y green, z blue."""
     return np.abs(normal)
 
 
 def shade_depth(t, max_distance):
-    """Grey 1 - t / max_distance: white at the eye, black at max_distance (source 002's "BN")."""
+    """Grey 1 - t / max_distance: white at the eye, black at max_distance (a depth image)."""
     grey = np.clip(1 - t / max_distance, 0, 1)
     return np.repeat(grey[:, None], 3, axis=1)
 

@@ -1,8 +1,8 @@
 """Bounding spheres of SDF trees: a sphere that holds the whole solid of a shape.
 
-Source 000 culls objects per ray with a bounding-sphere test (its ``intersectsBoundingVolume``):
-a ray that misses an object's bounding sphere can never reach that object, so the march may
-leave it out of the scene's distance. This module computes the spheres from the tree; the
+Ray tracers have culled objects with bounding spheres since Whitted 1980: a ray that misses an
+object's bounding sphere can never reach that object, so the march may leave it out of the
+scene's distance. This module computes the spheres from the tree; the
 ray test lives next to the march of each backend (`reference_cpu.culling`,
 ``glsl/culling.glsl``).
 

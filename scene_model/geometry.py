@@ -31,7 +31,8 @@ def angle_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def rotation_matrix(degrees) -> np.ndarray:
-    """R = Rz(z) Ry(y) Rx(x) for Euler angles in degrees (source 000), as a float64 (3, 3).
+    """R = Rz(z) Ry(y) Rx(x) for Euler angles in degrees, as a float64 (3, 3): turn about x first,
+    then y, then z, all about the fixed axes.
 
     A rotated shape is evaluated at R^T p: turning the query point back into the shape's frame.
     """

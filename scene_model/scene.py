@@ -53,7 +53,8 @@ class Checker(Record):
 
 @dataclass(frozen=True)
 class Material(Record):
-    """Phong material (source 000): colour and the ambient/diffuse/specular/mirror weights."""
+    """Phong material (Phong 1975; mirror weight after Whitted 1980): colour and the
+    ambient/diffuse/specular/mirror weights."""
     color: Color = param((0.8, 0.8, 0.8), "Albedo (linear RGB).", color_range)
     ka: float = param(0.1, "Ambient weight.", unit_interval)
     kd: float = param(0.8, "Diffuse weight.", unit_interval)
@@ -72,7 +73,8 @@ class Light(Record):
 
 @dataclass(frozen=True)
 class PointLight(Light):
-    """Light from a point, fading as 1 / (constant + linear d + quadratic d^2) (source 003)."""
+    """Light from a point, fading as 1 / (constant + linear d + quadratic d^2) (LearnOpenGL,
+    "Light casters")."""
     kind: ClassVar[str] = "point"
     position: Vec3 = param((0.0, 5.0, 0.0), "Position.")
     color: Color = param((1.0, 1.0, 1.0), "Colour.", color_range)
@@ -96,7 +98,8 @@ class DirectionalLight(Light):
 
 @dataclass(frozen=True)
 class SpotLight(Light):
-    """Point light limited to a cone with a soft edge between two angles (source 003)."""
+    """Point light limited to a cone with a soft edge between two angles (LearnOpenGL, "Light
+    casters")."""
     kind: ClassVar[str] = "spot"
     position: Vec3 = param((0.0, 5.0, 0.0), "Position.")
     direction: Vec3 = param((0.0, -1.0, 0.0), "Axis of the cone, away from the light.", nonzero)
@@ -168,7 +171,7 @@ class RenderSettings(Record):
                 "do not overlap.")
     omega: float = param(1.2, "Relaxation factor of relaxation = \"fixed\".", between(1.0, 2.0))
     bounding_spheres: bool = param(False, "Leave out of each ray's march the objects whose "
-                                          "bounding sphere it misses (source 000).")
+                                          "bounding sphere it misses (Whitted 1980).")
     normal_method: Literal["central", "tetrahedron"] = param(
         "central", "Gradient estimate: central differences (6 evaluations) or Quilez's "
                    "tetrahedron (4).")

@@ -214,7 +214,7 @@ class Translate(Node):
 
 @dataclass(frozen=True)
 class Rotate(Node):
-    """The child turned by Euler angles in degrees: R = Rz(z) Ry(y) Rx(x) (source 000)."""
+    """The child turned by Euler angles in degrees: R = Rz(z) Ry(y) Rx(x), about x first."""
     kind: ClassVar[str] = "rotate"
     child: Node = param(doc="The shape rotated.")
     degrees: Vec3 = param((0.0, 0.0, 0.0), "Angles about x, y and z in degrees.")

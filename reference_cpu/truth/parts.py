@@ -30,7 +30,7 @@ class Part:
 
     Attributes
     ----------
-    leaf : Node
+    leaf : scene_model.shapes.Node
         A primitive, or a subtree that is neither a union nor a translate/rotate/scale.
     path : tuple
         Where ``leaf`` sits in the scene file, e.g. ``("objects", 2)``, for error messages.

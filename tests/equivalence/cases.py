@@ -96,8 +96,8 @@ def feature_cases() -> dict[str, Scene]:
     cases["light_directional"] = with_lights(base_scene(), directional)
     cases["light_spot"] = with_lights(base_scene(), spot)
     cases["lights_all_soft"] = with_lights(base_scene(shadows="soft"), directional, spot, point)
-    # faster marching (issue 6): relaxed steps, bounding-sphere culling, and both together
-    # with mirrors, whose rays start next to a surface
+    # faster marching (docs/sphere-tracing.md, "Longer steps"): relaxed steps, bounding-sphere
+    # culling, and both together with mirrors, whose rays start next to a surface
     several = [sphere(0.6).at(-0.9, 0.6, 0), torus(0.45, 0.15).rotate(70, 0, 0).at(0.7, 0.6, 0.4),
                box(0.35).rotate(0, 30, 0).at(0.2, 0.35, -1.0)]
     cases["relaxation_fixed"] = base_scene(relaxation="fixed", omega=1.5)

@@ -6,7 +6,7 @@ underestimates the distance to its surface by a lot: a bound, not an exact SDF. 
 tracing needs no more than a 1-Lipschitz bound, and this one is 1-Lipschitz for every k:
 where 0 < h < 1, d smin / dh = (a - b) - k (1 - 2h) = 0 (as a - b = k (1 - 2h) there), so
 grad smin = h grad a + (1 - h) grad b, a convex combination of unit vectors, of length <= 1;
-where h is clamped it is a or b. (The issue expected it not to be 1-Lipschitz; the sampled
+where h is clamped it is a or b. (One might expect it not to be 1-Lipschitz; the sampled
 difference quotients below stay <= 1 for k up to 16, and are reported at the end of the run.)
 
 So the renderer must not skip the surface: a ray stops at the first root t_root of the

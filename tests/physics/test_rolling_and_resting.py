@@ -9,7 +9,7 @@ gravity and the normal force pass through it), so rolling starts at
 
 at t* = 2 v0 / (7 mu g) = 0.4854 s for mu = 0.3, after x = v0 t* - mu g t*^2 / 2 = 2.0800 m.
 The discrete impulses conserve that angular momentum step by step too, so the final speed is
-5/7 v0 to rounding (checked to 1e-6 for every dt, as the issue asks; it holds to ~1e-13). t*
+5/7 v0 to rounding (checked to 1e-6 for every dt; it holds to ~1e-13). t*
 and the distance carry an O(dt) error: checked within one step and 0.5%.
 """
 
