@@ -133,6 +133,9 @@ def build_parser() -> Parser:
                    help="what `real` means (float64: opencl only); default: float32")
     p.add_argument("--numbered", action="store_true",
                    help="number the lines, as compiler messages do")
+    p.add_argument("--path-labels", action="store_true",
+                   help="the program the equivalence suite compiles: it also computes each "
+                        "pixel's path label (docs/equivalence.md)")
     p.add_argument("--set", action="extend", nargs="+", default=[], metavar="FIELD=VALUE")
     p.set_defaults(func=cmd_shader)
 

@@ -81,7 +81,7 @@ def cmd_shader(args) -> int:
     scene = load_scene(args.scene, args.set)
     from gpu_shader.generate import generate     # no OpenGL needed to generate
     source = generate(rendered_scene(scene), 640, 480, dialect=args.dialect,
-                      precision=args.precision).source
+                      precision=args.precision, path_labels=args.path_labels).source
     if args.numbered:
         lines = source.splitlines()
         width = len(str(len(lines)))

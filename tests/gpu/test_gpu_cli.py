@@ -22,10 +22,6 @@ from scene_model.builder import Camera, Scene, sphere
 SIZE = "48x36"
 
 
-
-
-
-
 # --- marchlab shader ---------------------------------------------------------------------
 
 def test_shader_prints_a_whole_program(capsys):
@@ -41,6 +37,16 @@ def test_shader_set_changes_the_program_as_the_scene_file_would(capsys):
     _, soft, _ = run_cli(capsys, "shader", "classroom", "--set", "render.shadows=soft")
     assert "soft_shadow(" in soft and "soft_shadow(" not in plain
     assert "hard_shadow(" not in soft
+
+
+def test_shader_has_path_labels_only_with_the_flag(capsys):
+    """A student's shader has no path-label code; --path-labels prints what the equivalence
+    suite compiles."""
+    _, plain, _ = run_cli(capsys, "shader", "classroom")
+    code, labelled, _ = run_cli(capsys, "shader", "classroom", "--path-labels")
+    assert code == 0
+    assert "path_step(" not in plain and "path_step(" in labelled
+    assert "int(px.path)" in labelled
 
 
 def test_numbered_shader_prefixes_consecutive_line_numbers(capsys):
