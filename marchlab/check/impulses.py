@@ -132,6 +132,12 @@ def bounce_velocity(student, samples: int = 200, seed: int = 1) -> CheckResult:
                 "unchanged"),
         Mistake(lambda c: bounce(c, clamp=False),
                 "a ball already leaving the wall (v . n >= 0) must keep its velocity"),
+        Mistake(lambda c: bounce(c, lambda e: 1 - e),
+                "used (1 - e) where (1 + e) belongs: removing v_N n stops the ball, and e v_N n "
+                "more sends it back, v - (1 + e)(v . n) n"),
+        Mistake(lambda c: c["v"] if c["v"] @ c["normal"] >= 0 else c["e"] * bounce(c, lambda e: 2),
+                "e times the mirror direction slows the tangential part too; without friction "
+                "only the normal part changes: v - (1 + e)(v . n) n"),
     ]
     return verdict("bounce_velocity", student, cases, expected, mistakes, " m/s")
 

@@ -21,7 +21,7 @@ from .result import CheckResult
 
 __all__ = ["op_union", "op_intersection", "op_subtraction", "op_smooth_union",
            "op_smooth_intersection", "op_smooth_subtraction", "smooth_union",
-           "op_translate", "op_rotate", "op_scale", "op_repeat"]
+           "op_translate", "op_rotate", "op_scale", "op_repeat", "op_repeat_limited"]
 
 
 # --- CSG operators ---------------------------------------------------------------------------
@@ -65,6 +65,9 @@ def op_subtraction(student: Callable, seed: int = 0) -> CheckResult:
         (lambda a, b: np.maximum(a, b), "that is the intersection: negate the cutter, "
          "max(d1, −d2)."),
         (lambda a, b: a - b, "distances do not subtract: 'inside 1 and outside 2' is "
+         "max(d1, −d2)."),
+        (lambda a, b: np.minimum(a, -b), "min keeps the points inside 1 *or* outside 2 (a union "
+         "with everything around shape 2); 'inside 1 and outside 2' is an intersection: "
          "max(d1, −d2)."),
     ]
     return compare("op_subtraction", student, S.op_subtraction, _pairs(seed, False),
@@ -118,20 +121,38 @@ def op_smooth_union(student: Callable, seed: int = 0) -> CheckResult:
 smooth_union = op_smooth_union
 
 
+# Lesson 02 derives the smooth intersection and subtraction from the smooth union, with
+# max(a, b) = −min(−a, −b): intersection = −smin(−d1, −d2), subtraction = −smin(−d1, d2).
+# These are the slips of that derivation.
+_NEGATE_RESULT = ("max(a, b) = −min(−a, −b): the smooth minimum of the negated distances must "
+                  "be negated again, or inside and outside swap.")
+
+
 def op_smooth_intersection(student: Callable, seed: int = 0) -> CheckResult:
     """Check ``student(d1, d2, k)`` -> (N,)."""
+    smin = S.op_smooth_union
+    mistakes = _smooth_mistakes(S.op_smooth_intersection, S.op_intersection, lambda a, b: a) + [
+        (lambda a, b, k: smin(-a, -b, k), _NEGATE_RESULT),
+        (lambda a, b, k: smin(a, b, k), "that is the smooth union; an intersection is a "
+         "(smooth) maximum: −smin(−d1, −d2, k)."),
+    ]
     return compare("op_smooth_intersection", student, S.op_smooth_intersection,
-                   _pairs(seed, True),
-                   _smooth_mistakes(S.op_smooth_intersection, S.op_intersection,
-                                    lambda a, b: a), True)
+                   _pairs(seed, True), mistakes, True)
 
 
 def op_smooth_subtraction(student: Callable, seed: int = 0) -> CheckResult:
     """Check ``student(d1, d2, k)`` (shape 1 minus shape 2, rounded) -> (N,)."""
+    smin = S.op_smooth_union
+    mistakes = _smooth_mistakes(S.op_smooth_subtraction, S.op_subtraction, lambda a, b: -b) + [
+        (lambda a, b, k: smin(-a, b, k), _NEGATE_RESULT),
+        (lambda a, b, k: -smin(a, -b, k), "you cut shape 1 out of shape 2; the result should "
+         "be shape 1 minus shape 2, the smooth version of max(d1, −d2)."),
+        (lambda a, b, k: smin(a, -b, k), "a smooth minimum of d1 and −d2 keeps the points "
+         "inside 1 *or* outside 2; 'inside 1 and outside 2' is a (smooth) maximum of d1 and "
+         "−d2."),
+    ]
     return compare("op_smooth_subtraction", student, S.op_smooth_subtraction,
-                   _pairs(seed, True),
-                   _smooth_mistakes(S.op_smooth_subtraction, S.op_subtraction,
-                                    lambda a, b: -b), True)
+                   _pairs(seed, True), mistakes, True)
 
 
 # --- Transforms (they move the query point) ----------------------------------------------------
@@ -187,3 +208,53 @@ def op_repeat(student: Callable, seed: int = 0) -> CheckResult:
         (lambda p, c: p - c * np.round(p / c), "the cells are right" + zero_axes + "."),
     ]
     return compare("op_repeat", student, S.op_repeat, cases, mistakes)
+
+
+def _limited_cases(rng):
+    """Points (a sixth of them with a coordinate exactly 0, like a query on the floor y = 0),
+    periods with a 0 on one axis in half the cases, and whole counts from 0 to 3."""
+    cases = []
+    for j in range(CASES):
+        period = rng.uniform(0.5, 2.0, 3)
+        if j >= CASES // 2:
+            period[j % 3] = 0.0
+        p = random_points(rng, 4.0)
+        p[::6, j % 3] = 0.0
+        cases.append((p, period, rng.integers(0, 4, 3).astype(float)))
+    return cases
+
+
+def op_repeat_limited(student: Callable, seed: int = 0) -> CheckResult:
+    """Check ``student(p, period, count)`` -> (N, 3): `op_repeat` with copies only in the cells
+    -count..count (count : (3,) whole numbers) of each axis; period 0 leaves an axis alone.
+
+    Points beyond the last copy must be measured from it. Half the points lie beyond it, a
+    sixth have a coordinate exactly 0 (on an axis whose period may be 0: 0 / 0 is nan).
+    """
+    safe = lambda c: np.where(c > 0, c, 1)
+    cell = lambda p, c: np.floor(p / safe(c) + 0.5)
+    fold = lambda p, c, index: p - np.where(c > 0, c * index, 0)
+
+    def divides_by_zero(p, c, n):
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return p - c * np.clip(np.floor(p / c + 0.5), -n, n)
+    mistakes = [
+        (lambda p, c, n: S.op_repeat(p, c), "these are infinitely many copies: clamp the cell "
+         "index to −count..count, so that the points beyond the last copy fold into it."),
+        (lambda p, c, n: np.where(np.abs(cell(p, c)) > n, p, S.op_repeat(p, c)), "beyond the "
+         "last copy the point is measured from the original at the origin; measure it from the "
+         "nearest copy, the last one: clamp the cell index to −count..count."),
+        (lambda p, c, n: fold(p, c, np.clip(cell(p, c), 0, n)), "the copies go both ways: "
+         "cells −count..count, so clamp the index to [−count, count], not [0, count]."),
+        (lambda p, c, n: fold(p, c, np.minimum(np.abs(cell(p, c)), n)), "the sign of the cell "
+         "index is lost (abs): on the negative side the point folds into the wrong copy; clamp "
+         "the signed index with np.clip(index, −count, count)."),
+        (lambda p, c, n: np.where(c > 0, S.op_repeat(np.clip(p, -c * (n + 0.5),
+                                                             c * (n + 0.5)), c), p),
+         "clamping the point puts every point beyond the last copy on the border of its cell, "
+         "at the same distance whatever its real one; clamp the cell index instead."),
+        (divides_by_zero, "an axis whose period is 0 is not repeated: leave that coordinate as "
+         "it is, np.where(period > 0, ..., p); p / 0 is nan where the coordinate is 0."),
+    ]
+    cases = _limited_cases(np.random.default_rng(seed))
+    return compare("op_repeat_limited", student, S.op_repeat_limited, cases, mistakes)

@@ -5,8 +5,8 @@
 
 - `marchlab.check.impulses`: restitution, a bounce off a wall, Coulomb friction, the
   effective masses of a contact (lessons 05 and 06);
-- `marchlab.check.integration`: bounce heights measured in the simulator and the three
-  integrators' position steps (lesson 06);
+- `marchlab.check.integration`: bounce heights and impact times measured in the simulator
+  and the three integrators' position steps (lesson 06);
 - `marchlab.check.invariants`: kinetic energy and momentum (lesson 07).
 
 The student's functions have the signatures of the lessons' exercises; where ``physics`` has

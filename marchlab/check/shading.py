@@ -84,8 +84,15 @@ def _specular_mistakes(model):
                          "R = reflect(−L, N): L points toward the light, so the light travels "
                          "along −L; reflect(L, N) points into the surface."))
     else:
-        mistakes.append((mask(lambda n, l, v, a: np.maximum(dot(n, l + v), 0) ** a),
-                         "H = normalize(L + V): without normalising, N·H is not a cosine."))
+        mistakes += [
+            (mask(lambda n, l, v, a: np.maximum(dot(n, l + v), 0) ** a),
+             "H = normalize(L + V): without normalising, N·H is not a cosine."),
+            (mask(lambda n, l, v, a: np.maximum(dot(n, normalize(v - l)), 0) ** a),
+             "H = normalize(L + V): both L and V point away from the surface (toward the light "
+             "and the eye), so the half vector is their sum, not V − L."),
+        ]
+    mistakes.append((mask(lambda n, l, v, a: np.maximum(cosine(n, l, v), 0)),
+                     "the shininess is missing: raise the clamped cosine to the power alpha."))
     return mistakes
 
 
@@ -125,15 +132,22 @@ def _surfaces(seed):
 
 def _shade_mistakes(specular):
     def lit(s, incoming, ambient, tint=False, with_ambient=True, albedo_ambient=True,
-            with_radiance=True):
-        color = s.ka[:, None] * (s.albedo if albedo_ambient else 1) * ambient * with_ambient
+            with_radiance=True, ambient_per_light=False, clamp=True):
+        base = s.ka[:, None] * (s.albedo if albedo_ambient else 1) * ambient * with_ambient
+        color = 0 * base if ambient_per_light else base
         for l, radiance in incoming:
             sp = (s.ks * specular(s.normal, l, s.view, s.shininess))[:, None]
-            term = s.kd[:, None] * SH.diffuse(s.normal, l)[:, None] * s.albedo + \
-                sp * (s.albedo if tint else 1)
+            cosine = SH.diffuse(s.normal, l) if clamp else dot(s.normal, l)
+            term = s.kd[:, None] * cosine[:, None] * s.albedo + sp * (s.albedo if tint else 1)
             color = color + (radiance if with_radiance else 1) * term
+            color = color + (base if ambient_per_light else 0)
         return color
     return [
+        (lambda *a: lit(*a, ambient_per_light=True), "the ambient term is added once per "
+         "light; it stands for the light of the whole room and is added once, outside the sum "
+         "over the lights."),
+        (lambda *a: lit(*a, clamp=False), "the diffuse cosine is not clamped: N·L < 0 (a light "
+         "behind the surface) would subtract light; use max(N·L, 0)."),
         (lambda *a: lit(*a, tint=True), "the specular term is multiplied by the albedo; "
          "in this model the highlight has the light's colour, not the surface's."),
         (lambda *a: lit(*a, with_ambient=False), "the ambient term ka·albedo·i_a is missing."),

@@ -60,12 +60,13 @@ def soft_shadow(student: Callable, seed: int = 0) -> CheckResult:
     """Check ``student(sdf, origins, to_light, light_distance, max_steps, epsilon,
     max_distance, k)`` -> (N,) in [0, 1], Quilez's penumbra estimate."""
     def penumbra(sdf, o, l, dist, steps, eps, far, k, zero_blocked=True, scale=1.0,
-                 limit=True):
+                 limit=True, over_t=True):
         visible = np.ones(len(o))
 
         def observe(index, t, h, step):
             if step > 1:
-                visible[index] = np.minimum(visible[index], scale * k * h / t)
+                visible[index] = np.minimum(visible[index],
+                                            scale * k * h / (t if over_t else 1))
         lim = np.minimum(dist, far) if limit else far
         _, _, blocked = M.march(o, l, sdf, steps, eps, lim, observe=observe)
         if zero_blocked:
@@ -80,6 +81,9 @@ def soft_shadow(student: Callable, seed: int = 0) -> CheckResult:
          "min(light_distance, max_distance)."),
         (lambda *a: SW.hard_shadow(*a[:7]), "these are hard shadows (0 or 1): keep the "
          "smallest k·h/t seen along the ray (march's observe argument gives h and t)."),
+        (lambda *a: penumbra(*a, over_t=False), "the clearance h must be divided by the "
+         "distance t travelled: h/t is the angle at which the occluder is passed, and an "
+         "occluder far along the ray hides less of the light than a near one."),
     ]
     return compare("soft_shadow", student, SW.soft_shadow, _shadow_cases(seed, True),
                    mistakes)

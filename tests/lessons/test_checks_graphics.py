@@ -29,6 +29,7 @@ REFERENCES = {
     "op_smooth_intersection": S.op_smooth_intersection,
     "op_smooth_subtraction": S.op_smooth_subtraction, "op_translate": S.op_translate,
     "op_rotate": S.op_rotate, "op_scale": S.op_scale, "op_repeat": S.op_repeat,
+    "op_repeat_limited": S.op_repeat_limited,
     "reflect": SH.reflect, "diffuse": SH.diffuse, "specular_phong": SH.specular_phong,
     "specular_blinn_phong": SH.specular_blinn_phong, "shade_phong": SH.shade_phong,
     "shade_blinn_phong": SH.shade_blinn_phong, "attenuation": attenuation,
@@ -42,14 +43,34 @@ ALIASES = {"smooth_union": "op_smooth_union", "phong": "specular_phong",
            "blinn_phong": "specular_blinn_phong"}
 
 
-def _lit(s, incoming, ambient, specular, tint=False, with_ambient=True):
-    """Phong-style sum written out here, with switches for two classic mistakes."""
-    color = s.ka[:, None] * s.albedo * ambient * with_ambient
+def _lit(s, incoming, ambient, specular, tint=False, with_ambient=True,
+         ambient_per_light=False, clamp=True):
+    """Phong-style sum written out here, with switches for four classic mistakes."""
+    color = s.ka[:, None] * s.albedo * ambient * with_ambient * (not ambient_per_light)
     for l, radiance in incoming:
         highlight = (s.ks * specular(s.normal, l, s.view, s.shininess))[:, None]
-        color = color + radiance * (s.kd[:, None] * SH.diffuse(s.normal, l)[:, None] * s.albedo
+        cosine = SH.diffuse(s.normal, l) if clamp else dot(s.normal, l)
+        color = color + radiance * (s.kd[:, None] * cosine[:, None] * s.albedo
                                     + highlight * (s.albedo if tint else 1))
+        if ambient_per_light:
+            color = color + s.ka[:, None] * s.albedo * ambient
     return color
+
+
+def _cell(p, period):
+    """The index of the repetition cell of each coordinate (0 on an axis of period 0)."""
+    return np.where(period > 0, np.floor(p / np.where(period > 0, period, 1) + 0.5), 0)
+
+
+def _fold(p, period, cell):
+    """p moved back by ``cell`` periods."""
+    return p - period * cell
+
+
+def _repeat_dividing_by_zero(p, period, count):
+    """The limited repetition without a case for period 0: p / 0 is ±inf, and nan at p = 0."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return p - period * np.clip(np.floor(p / period + 0.5), -count, count)
 
 
 def _steps_to_floor(height, angle, epsilon, max_steps, first=2):
@@ -60,14 +81,19 @@ def _steps_to_floor(height, angle, epsilon, max_steps, first=2):
     return np.minimum(steps, max_steps)
 
 
-def _soft_shadow_keeping_blocked(sdf, o, l, distance, max_steps, epsilon, far, k):
-    """Quilez's estimate without setting blocked rays to 0."""
+def _soft_shadow_keeping_blocked(sdf, o, l, distance, max_steps, epsilon, far, k, over_t=True,
+                                 zero=False):
+    """Quilez's estimate without setting blocked rays to 0 (``zero=True`` sets them), and with
+    ``over_t=False`` without dividing the clearance h by t."""
     visible = np.ones(len(o))
 
     def observe(index, t, h, step):
         if step > 1:
-            visible[index] = np.minimum(visible[index], k * h / t)
-    M.march(o, l, sdf, max_steps, epsilon, np.minimum(distance, far), observe=observe)
+            visible[index] = np.minimum(visible[index], k * h / (t if over_t else 1))
+    _, _, blocked = M.march(o, l, sdf, max_steps, epsilon, np.minimum(distance, far),
+                            observe=observe)
+    if zero:
+        visible[blocked] = 0
     return np.clip(visible, 0, 1)
 
 
@@ -93,6 +119,38 @@ WRONG = [
     ("op_scale", lambda p, s: p * s, "p / s"),
     ("op_repeat", lambda p, c: np.where(c > 0, np.mod(p, np.where(c > 0, c, 1)), p),
      "not centred"),
+    ("op_repeat_limited", lambda p, c, n: S.op_repeat(p, c), "clamp the cell index"),
+    ("op_repeat_limited", lambda p, c, n: _fold(p, c, np.minimum(np.abs(_cell(p, c)), n)),
+     "sign of the cell index is lost"),
+    ("op_repeat_limited", lambda p, c, n: _fold(p, c, np.where(np.abs(_cell(p, c)) > n, 0,
+                                                               _cell(p, c))),
+     "measure it from the nearest copy, the last one"),
+    ("op_repeat_limited", lambda p, c, n: _repeat_dividing_by_zero(p, c, n),
+     "p / 0 is nan where the coordinate is 0"),
+    ("op_repeat_limited", lambda p, c, n: _fold(p, c, np.clip(_cell(p, c), 0, n)),
+     "not [0, count]"),
+    ("op_repeat_limited", lambda p, c, n: np.where(
+        c > 0, S.op_repeat(np.clip(p, -c * (n + 0.5), c * (n + 0.5)), c), p),
+     "clamp the cell index instead"),
+    ("op_subtraction", lambda a, b: np.minimum(a, -b), "inside 1 *or* outside 2"),
+    ("op_smooth_subtraction", lambda a, b, k: S.op_smooth_union(-a, b, k), "negated again"),
+    ("op_smooth_subtraction", lambda a, b, k: -S.op_smooth_union(a, -b, k),
+     "cut shape 1 out of shape 2"),
+    ("op_smooth_subtraction", lambda a, b, k: S.op_smooth_union(a, -b, k),
+     "inside 1 *or* outside 2"),
+    ("op_smooth_intersection", lambda a, b, k: S.op_smooth_union(-a, -b, k), "negated again"),
+    ("op_smooth_intersection", lambda a, b, k: S.op_smooth_union(a, b, k),
+     "that is the smooth union"),
+    ("specular_blinn_phong", lambda n, l, v, a: np.where(
+        dot(n, l) > 0, np.maximum(dot(n, normalize(v - l)), 0) ** a, 0), "not V − L"),
+    ("specular_blinn_phong", lambda n, l, v, a: np.where(
+        dot(n, l) > 0, np.maximum(dot(n, normalize(l + v)), 0), 0), "shininess is missing"),
+    ("shade_phong", lambda s, i, a: _lit(s, i, a, SH.specular_phong, ambient_per_light=True),
+     "once per light"),
+    ("shade_phong", lambda s, i, a: _lit(s, i, a, SH.specular_phong, clamp=False),
+     "diffuse cosine is not clamped"),
+    ("soft_shadow", lambda *args: _soft_shadow_keeping_blocked(*args, over_t=False, zero=True),
+     "divided by the distance t"),
     ("reflect", lambda d, n: d - dot(d, n)[:, None] * n, "factor 2"),
     ("diffuse", lambda n, l: dot(n, l), "not clamped"),
     ("specular_phong", lambda n, l, v, a: np.where(
@@ -212,6 +270,30 @@ def test_steps_to_floor_that_ignores_max_steps_is_told_so():
     result = run("steps_to_floor", unlimited)
     flat = " ".join(result.message.split())
     assert not result.passed and "never more than max_steps" in flat
+
+
+def test_smooth_intersection_and_subtraction_derived_from_the_smooth_union_pass():
+    """Lesson 02's route: max(a, b) = -min(-a, -b) turns the smooth union into the others,
+    equal to marchlab's within the tolerance."""
+    smin = S.op_smooth_union
+    for name, derived in (("op_smooth_intersection", lambda a, b, k: -smin(-a, -b, k)),
+                          ("op_smooth_subtraction", lambda a, b, k: -smin(-a, b, k))):
+        result = run(name, derived)
+        assert result.passed and result.max_error <= graphics.TOLERANCE
+
+
+def test_op_repeat_limited_passes_a_clamped_round_and_fails_an_unclamped_one_beyond_the_copies():
+    """Clamping the rounded cell index is right; without the clamp only the points inside the
+    last copy agree, and the check finds the others (half its points lie beyond)."""
+    def clamped(p, period, count):
+        index = np.clip(np.round(p / np.where(period > 0, period, 1)), -count, count)
+        return p - np.where(period > 0, period * index, 0)
+
+    assert run("op_repeat_limited", clamped).passed
+    result = run("op_repeat_limited", lambda p, period, count: S.op_repeat(p, period))
+    assert not result.passed
+    wrong = int(" ".join(result.message.split()).split("wrong at ")[1].split()[0])
+    assert 0.3 * result.samples < wrong < result.samples
 
 
 def test_first_failing_input_is_quoted_with_expected_and_got():

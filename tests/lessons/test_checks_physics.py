@@ -27,6 +27,12 @@ def coulomb_friction(v_tangent, k_tangent, limit):
     return sticking * limit / length if length > limit else sticking
 
 
+def impact_time(h0, e, n):
+    """t0 (1 + 2 (e + ... + e^(n-1))), t0 = sqrt(2 h0 / g): the fall, then n - 1 flights."""
+    t0 = np.sqrt(2 * h0 / 9.81)
+    return t0 * (1 + 2 * sum(e ** k for k in range(1, n)))
+
+
 def solid_sphere_energy(mass, radius, velocity, angular_velocity):
     inertia = 0.4 * mass * radius ** 2
     return 0.5 * np.sum(mass * np.sum(velocity ** 2, axis=1)
@@ -39,6 +45,7 @@ CORRECT = {
     "friction_impulse": coulomb_friction,
     "effective_masses": impulses.effective_masses,
     "bounce_height": lambda h0, e, n: e ** (2 * n) * h0,
+    "bounce_time": impact_time,
     "explicit_euler": integrators.explicit_euler,
     "semi_implicit_euler": integrators.semi_implicit_euler,
     "velocity_verlet": integrators.velocity_verlet,
@@ -135,10 +142,27 @@ MISTAKES = [
      lambda inverse_mass_a, inverse_mass_b, *rest: (inverse_mass_a + inverse_mass_b,) * 2),
     ("bounce_height", "square of the speed", lambda h0, e, n: e ** n * h0),
     ("bounce_height", "off by one bounce", lambda h0, e, n: e ** (2 * n - 2) * h0),
+    ("bounce_velocity", "used (1 - e)",
+     lambda v, normal, e: v if v @ normal >= 0 else v - (1 - e) * (v @ normal) * normal),
+    ("bounce_velocity", "slows the tangential part",
+     lambda v, normal, e: v if v @ normal >= 0 else e * (v - 2 * (v @ normal) * normal)),
+    ("bounce_time", "up and comes down again",
+     lambda h0, e, n: np.sqrt(2 * h0 / 9.81) * (1 + sum(e ** k for k in range(1, n)))),
+    ("bounce_time", "ratio of the heights",
+     lambda h0, e, n: np.sqrt(2 * h0 / 9.81) * (1 + 2 * sum(e ** (2 * k) for k in range(1, n)))),
+    ("bounce_time", "one flight too many",
+     lambda h0, e, n: np.sqrt(2 * h0 / 9.81) * (1 + 2 * sum(e ** k for k in range(1, n + 1)))),
+    ("bounce_time", "first fall is missing",
+     lambda h0, e, n: np.sqrt(2 * h0 / 9.81) * 2 * sum(e ** k for k in range(1, n))),
+    ("bounce_time", "not sqrt(h0 / g)", lambda h0, e, n: impact_time(h0 / 2, e, n)),
     ("semi_implicit_euler", "explicit Euler", integrators.explicit_euler),
     ("explicit_euler", "semi-implicit Euler", integrators.semi_implicit_euler),
     ("velocity_verlet", "semi-implicit Euler", integrators.semi_implicit_euler),
     ("semi_implicit_euler", "forgot h", lambda x, v_old, v_new, h: x + v_new),
+    ("velocity_verlet", "explicit Euler", integrators.explicit_euler),
+    ("velocity_verlet", "a = (v_new - v_old) / h",
+     lambda x, v_old, v_new, h: x + h * v_old + 0.5 * h * h * (v_new - v_old)),
+    ("velocity_verlet", "twice their mean", lambda x, v_old, v_new, h: x + h * (v_old + v_new)),
     ("kinetic_energy", "rotational energy",
      lambda mass, radius, velocity, angular_velocity:
          0.5 * np.sum(mass * np.sum(velocity ** 2, axis=1))),
@@ -165,6 +189,29 @@ def test_check_says_a_function_without_return_returned_none(name, capsys):
         CORRECT[name](*args, **kwargs)
     result, out = run(name, forgot_return, capsys)
     assert not result and "returned None" in out
+
+
+def test_bounce_time_tells_a_geometric_sum_divided_by_zero_at_e_1(capsys):
+    """The closed form (1 - e^(n-1)) / (1 - e) is 0 / 0 at e = 1, which the check includes:
+    with NumPy numbers it is nan and the hint says why, with Python ones the division raises
+    and the verdict quotes the input."""
+    def closed_form(h0, e, n):
+        e = np.float64(e)
+        with np.errstate(all="ignore"):
+            return np.sqrt(2 * h0 / 9.81) * (1 + 2 * e * (1 - e ** (n - 1)) / (1 - e))
+    result, out = run("bounce_time", closed_form, capsys)
+    assert not result and "wrong on 4 of 16" in out and "0 / 0" in out, out
+
+    def python_closed_form(h0, e, n):
+        return (2 * h0 / 9.81) ** 0.5 * (1 + 2 * e * (1 - e ** (n - 1)) / (1 - e))
+    result, out = run("bounce_time", python_closed_form, capsys)
+    assert not result and "ZeroDivisionError" in out and "e=1" in out, out
+
+
+def test_bounce_time_agrees_with_the_simulator_to_rounding(capsys):
+    """The impact times measured in physics.simulate are the closed form to 1e-13 s."""
+    result, out = run("bounce_time", impact_time, capsys)
+    assert result and result.samples == 16 and result.max_error < 1e-13, out
 
 
 def test_a_function_that_changes_its_argument_in_place_is_caught(capsys):
