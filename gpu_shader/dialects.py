@@ -38,7 +38,6 @@ class Dialect:
     name: str
     prelude: str                                  # first lines of every program
     struct: Callable[[str, tuple], str]           # a struct declaration
-    to_real: Callable[[str], str]                 # int expression -> real
     to_int: Callable[[str], str]                  # real expression -> int
     declare_parameters: Callable[[int, int, int], str]  # how the program receives U and P
     real_dtype: np.dtype                          # precision of `real`
@@ -50,9 +49,9 @@ class Dialect:
     vertex_shader: Callable[[int, int, int], str] = lambda rows, fixed, flat_rows: ""
 
     def library(self, name: str):
-        """The building blocks ``glsl/<name>.glsl``, or their packet twins
-        ``glsl/<name>_packet.cl`` in a packet program."""
-        return load_library(f"{name}_packet" if self.packets else name)
+        """The building blocks ``glsl/<name>.glsl`` (a packet program derives its own from
+        them: gpu_shader/packets.py)."""
+        return load_library(name)
 
     def literal(self, value: float) -> str:
         """A number literal that reads back as exactly ``value`` rounded to `real`."""
@@ -155,7 +154,6 @@ GLSL = Dialect(
 #define INFINITY uintBitsToFloat(0x7F800000u)
 """,
     struct=_glsl_struct,
-    to_real=lambda expr: f"float({expr})",
     to_int=lambda expr: f"int({expr})",
     declare_parameters=_glsl_parameters,
     vertex_shader=glsl_vertex_shader,
@@ -240,12 +238,12 @@ typedef {unsigned}{n} upacket;
 
 
 # Struct fields in a packet program: one value per ray.
-_PACKET_FIELD_TYPES = {"real": "packet", "int": "ipacket", "vec3": "vec3p", "vec4": "vec4p",
-                      "Hit": "Hit"}
+_PACKET_FIELD_TYPES = {"real": "packet", "int": "ipacket", "uint": "upacket", "bool": "ipacket",
+                       "vec2": "vec2p", "vec3": "vec3p", "vec4": "vec4p"}
 
 
 def _opencl_packet_struct(name: str, fields) -> str:
-    return _opencl_struct(name, [(_PACKET_FIELD_TYPES[t], f) for t, f in fields])
+    return _opencl_struct(name, [(_PACKET_FIELD_TYPES.get(t, t), f) for t, f in fields])
 
 
 # OpenCL C 1.2 has no program-scope variables but compile-time constants, so the parameters
@@ -301,7 +299,6 @@ def _opencl(real: str, dtype, packets: bool = False) -> Dialect:
         name="opencl-packets" if packets else "opencl",
         prelude=_opencl_packet_prelude(real) if packets else _opencl_prelude(real) + _OPENCL_VECTORS,
         struct=_opencl_packet_struct if packets else _opencl_struct,
-        to_real=lambda expr: f"(real)({expr})",
         to_int=lambda expr: f"(int)({expr})",
         declare_parameters=lambda rows, fixed, flat_rows: _OPENCL_PARAMETERS,
         real_dtype=np.dtype(dtype),

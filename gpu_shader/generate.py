@@ -40,7 +40,8 @@ from scene_model.shapes import primitives
 from .dialects import MAX_FLAT_ROWS, Dialect, dialect as get_dialect
 from .library import fill_template
 from .parameters import ParameterBlock
-from .sdf_code import PACKET_TYPES, SCALAR_TYPES, scene_sdf_code
+from .packets import packet_source
+from .sdf_code import scene_sdf_code
 
 LIT_MODES = ("phong", "blinn_phong", "toon")
 SPECULAR = {"phong": "specular_phong", "blinn_phong": "specular_blinn_phong",
@@ -93,8 +94,11 @@ def generate(scene: Scene, width: int, height: int, dialect: str = "glsl",
     except KeyError as err:
         raise MarchlabError(err.args[0]) from None
     if language.packets:
-        from .generate_packets import PacketGenerator
-        return PacketGenerator(scene, language, path_labels=True).program(width, height)
+        # The packet program is the one-ray program, vectorised (gpu_shader/packets.py).
+        scalar = scalar_program(scene, width, height, precision, path_labels,
+                                pair_shadow_rays=False)
+        return Program(packet_source(scalar, language), scalar.parameters, scalar.features,
+                       path_labels=path_labels)
     return _Generator(scene, language, flat_rows, path_labels).program(width, height)
 
 
@@ -123,9 +127,14 @@ class ScalarProgram:
 
 
 def scalar_program(scene: Scene, width: int, height: int, precision: str = "float32",
-                   path_labels: bool = False) -> ScalarProgram:
-    """The one-ray OpenCL program of ``scene``, unwrapped (see `ScalarProgram`)."""
-    generator = _Generator(scene, get_dialect("opencl", precision), path_labels=path_labels)
+                   path_labels: bool = False, pair_shadow_rays: bool = True) -> ScalarProgram:
+    """The one-ray OpenCL program of ``scene``, unwrapped (see `ScalarProgram`).
+
+    ``pair_shadow_rays`` False marches every shadow ray alone, as the packet form wants: its
+    loop already steps a packet of rays at once, and a second ray per lane only adds work.
+    """
+    generator = _Generator(scene, get_dialect("opencl", precision), path_labels=path_labels,
+                           pair_shadow_rays=pair_shadow_rays)
     parts, _ = generator.sections(width, height)
     functions = "\n".join(_banner(title) + text for title, text in parts if text)
     return ScalarProgram(generator.block.defines(), functions,
@@ -135,7 +144,7 @@ def scalar_program(scene: Scene, width: int, height: int, precision: str = "floa
 
 class _Generator:
     def __init__(self, scene: Scene, dialect: Dialect, flat_rows: int = 0,
-                 path_labels: bool = False):
+                 path_labels: bool = False, pair_shadow_rays: bool = True):
         self.scene, self.s, self.d = scene, scene.render, dialect
         self.flat_rows, self.path_labels = flat_rows, path_labels
         self.block = ParameterBlock()
@@ -146,13 +155,12 @@ class _Generator:
         self.reflections = (self.s.reflection_depth > 0 and self.s.shading in LIT_MODES
                             and any(m.kr > 0 for m in self.materials))
         self.fog = self.s.fog.density > 0 and self.s.shading in LIT_MODES
-        self.types = PACKET_TYPES if dialect.packets else SCALAR_TYPES
-        # Hard shadow rays toward two lights are marched together (hard_shadow_pair) in a
-        # program with one ray per pixel and plain sphere tracing (relaxed shadow rays keep
-        # the relaxed march of their own): lights 0 .. paired_lights - 1, two by two. The
-        # last of an odd number, or every light without pairs, is marched alone.
+        # Hard shadow rays toward two lights are marched together (hard_shadow_pair) with
+        # plain sphere tracing (relaxed shadow rays keep the relaxed march of their own):
+        # lights 0 .. paired_lights - 1, two by two. The last of an odd number, or every
+        # light without pairs, is marched alone.
         lights = len(scene.lights)
-        pairs = (PAIR_SHADOW_RAYS and not dialect.packets and self.s.shading in LIT_MODES
+        pairs = (PAIR_SHADOW_RAYS and pair_shadow_rays and self.s.shading in LIT_MODES
                  and self.s.shadows == "hard" and self.s.relaxation == "none")
         self.paired_lights = lights - lights % 2 if pairs else 0
         self.lone_shadows = self.paired_lights < lights
@@ -180,8 +188,7 @@ class _Generator:
         if self.s.bounding_spheres:
             self.features.add("bounding_spheres")
             bounds = culled_bounds(self.scene.objects, self.s.epsilon)
-        sdf_source, sdf_used = scene_sdf_code(self.scene.objects, self.block, bounds,
-                                              self.types)
+        sdf_source, sdf_used = scene_sdf_code(self.scene.objects, self.block, bounds)
         self.features |= sdf_used
         culling = self.d.library("culling").select(["ray_meets_sphere"]) if bounds else ""
         parts = [
@@ -294,9 +301,9 @@ class _Generator:
         ] + pairs + [(f"the {mode} model over the scene's lights (glsl/pipeline/shade.glsl)",
                       light_source)]
 
-    def material_rows(self) -> tuple[int, int, str]:
-        """Append each object's material rows; return the first row, the rows per object and
-        a comment saying what the rows hold (for the packet program's own material code)."""
+    def material_code(self) -> str:
+        """Append each object's material rows (after every fixed row); return
+        ``MATERIAL(id, row)``, which reads them by object id, and ``surface_albedo``."""
         stride = 4 if self.checker else 2
         first = len(self.block.rows)
         for m in self.materials:
@@ -308,37 +315,20 @@ class _Generator:
                 self.block.row([*c.color_b, 1.0] if c else [0, 0, 0, 0])
         if self.checker:
             self.features.add("checker")
-        return first, stride, ("// Row 0: (color, ka); row 1: (kd, ks, shininess, kr)"
-                               + ("; row 2: (checker color_a, scale);\n// row 3: (checker color_b, "
-                                  "1 if checkered)." if self.checker else "."))
-
-    def material_code(self) -> str:
-        """``MATERIAL(id, row)``, the material rows per object id, and ``surface_albedo``."""
-        first, stride, _ = self.material_rows()
         return self.template("materials", first=first, stride=stride, checker=self.checker)
 
     def light_code(self) -> tuple[str, list[str]]:
         """The shading function over the scene's lights (and the shadow functions it calls),
         and the light functions it needs."""
-        lights = [{"index": i, "kind": self.light_call(i, light)[0]}
+        lights = [{"index": i, "kind": self.light_rows(i, light)}
                   for i, light in enumerate(self.scene.lights)]
         source = self.template("shade", lights=lights, shadows=self.s.shadows,
                                paired=self.paired_lights, checker=self.checker)
         return source, sorted({f"light_{light['kind']}" for light in lights})
 
-    def light_terms(self) -> tuple[str, str]:
-        """The diffuse and specular terms of one light sample ``s`` in the shading mode."""
-        mode = self.s.shading
-        term = {"phong": "diffuse(n, s.to_light)", "blinn_phong": "diffuse(n, s.to_light)",
-                "toon": "toon_band(diffuse(n, s.to_light), TOON_BANDS)"}[mode]
-        spec = f"{SPECULAR[mode]}(n, s.to_light, v, shininess)"
-        if mode == "toon":
-            spec = f"toon_band({spec}, TOON_BANDS)"
-        return term, spec
-
-    def light_call(self, i: int, light) -> tuple[str, str]:
-        """Put light ``i``'s numbers in the parameter block (``LIGHTi_POSITION``, ...); return
-        its kind and the call that samples it at p."""
+    def light_rows(self, i: int, light) -> str:
+        """Put light ``i``'s numbers in the parameter block (``LIGHTi_POSITION``, ...), as the
+        light functions of glsl/lights.glsl take them; return its kind."""
         kind = LIGHT_KINDS.get(type(light))
         if kind is None:
             raise MarchlabError(f"the shader generator does not support lights of type "
@@ -351,18 +341,17 @@ class _Generator:
             direction = np.asarray(light.direction, dtype=np.float64)
             b.named({L + "TO_LIGHT": ("xyz", -direction / np.linalg.norm(direction))})
             b.named({L + "RADIANCE": ("xyz", radiance)})
-            return kind, f"light_directional({L}TO_LIGHT, {L}RADIANCE)"
+            return kind
         b.named({L + "POSITION": ("xyz", light.position)})
         b.named({L + "RADIANCE": ("xyz", radiance)})
         b.named({L + "ATTENUATION": ("xyz", (light.constant, light.linear, light.quadratic))})
-        if kind == "point":
-            return kind, f"light_point(p, {L}POSITION, {L}RADIANCE, {L}ATTENUATION)"
-        axis = np.asarray(light.direction, dtype=np.float64)
-        cos_inner = math.cos(math.radians(light.inner_angle))
-        cos_outer = math.cos(math.radians(light.outer_angle))
-        b.named({L + "AXIS": ("xyz", axis / np.linalg.norm(axis))})
-        b.named({L + "CONE": ("xy", (cos_outer, cos_inner - cos_outer))})
-        return kind, f"light_spot(p, {L}POSITION, {L}RADIANCE, {L}ATTENUATION, {L}AXIS, {L}CONE)"
+        if kind == "spot":
+            axis = np.asarray(light.direction, dtype=np.float64)
+            cos_inner = math.cos(math.radians(light.inner_angle))
+            cos_outer = math.cos(math.radians(light.outer_angle))
+            b.named({L + "AXIS": ("xyz", axis / np.linalg.norm(axis))})
+            b.named({L + "CONE": ("xy", (cos_outer, cos_inner - cos_outer))})
+        return kind
 
     def background_code(self) -> tuple[str, list[str]]:
         """``background(direction)`` and the library function it calls."""
@@ -373,10 +362,7 @@ class _Generator:
         else:
             self.block.named({"BACKGROUND_BOTTOM": ("xyz", self.s.background.bottom)})
             self.block.named({"BACKGROUND_TOP": ("xyz", self.s.background.top)})
-        source = self.template("background", kind=kind)
-        if self.d.packets:        # the packet program's own pipeline calls it with packets
-            source = source.replace("vec3 ", "vec3p ")
-        return source, [f"background_{kind}"]
+        return self.template("background", kind=kind), [f"background_{kind}"]
 
     def heat_code(self) -> str:
         """``heat``, linear between the stops of `scene_model.colormaps`."""

@@ -171,7 +171,7 @@ def render(scene: Scene, width: int, height: int, precision: str = "float32",
     """Render ``scene`` with the OpenCL kernel (see `marchlab.render`).
 
     ``packets`` (the default) runs the packet program, LANES pixels of a row per work-item
-    computed as vectors (`gpu_shader.generate_packets`), which is several times faster on a
+    computed as vectors (`gpu_shader.packets`), which is several times faster on a
     CPU; False runs the one-ray program, the line-by-line twin of the GLSL shader. Both give
     the same frame (tests/opencl/test_packet_program.py).
     """

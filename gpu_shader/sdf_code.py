@@ -35,10 +35,6 @@ PRIMITIVES = {Sphere: "sdf_sphere", Box: "sdf_box", RoundBox: "sdf_round_box",
               Plane: "sdf_plane", Torus: "sdf_torus", CappedCylinder: "sdf_capped_cylinder",
               Capsule: "sdf_capsule", Cone: "sdf_cone"}
 
-# The types of the generated code: one value per ray, or (in a packet program) one packet.
-SCALAR_TYPES = {"real": "real", "vec3": "vec3", "int": "int", "uint": "uint"}
-PACKET_TYPES = {"real": "packet", "vec3": "vec3p", "int": "ipacket", "uint": "upacket"}
-
 TRANSFORMS = {Translate: "op_translate", Rotate: "op_rotate", Scale: "op_scale",
               Repeat: "op_repeat"}
 
@@ -106,9 +102,8 @@ class SdfWriter:
     the second walk is given the rows the first allocated (``replay``) and checks them.
     """
 
-    def __init__(self, block: ParameterBlock, with_ids: bool, replay: list[int] | None = None,
-                 types: dict[str, str] = SCALAR_TYPES):
-        self.block, self.with_ids, self.types = block, with_ids, types
+    def __init__(self, block: ParameterBlock, with_ids: bool, replay: list[int] | None = None):
+        self.block, self.with_ids = block, with_ids
         self.lines: list[str] = []
         self.used: set[str] = set()              # library functions called
         self.rows: list[int] = []                # first row of each node, in visit order
@@ -145,13 +140,13 @@ class SdfWriter:
             d = self.name("d")
             # (No material name here: which material an object wears is a parameter.)
             self.lines.append(f"// object {object_id}: {node.kind}")
-            self.lines.append(f"{self.types['real']} {d} = {self.call(PRIMITIVES[type(node)], [p] + args, first)};")
+            self.lines.append(f"real {d} = {self.call(PRIMITIVES[type(node)], [p] + args, first)};")
             return d, str(object_id)
         if type(node) in TRANSFORMS:
             function, rows, args = transform_parameters(node)
             first = self.allocate(rows)
             q = self.name("p")
-            self.lines.append(f"{self.types['vec3']} {q} = {self.call(function, [p] + args, first)};")
+            self.lines.append(f"vec3 {q} = {self.call(function, [p] + args, first)};")
             d, ids = self.node(node.child, q)
             if isinstance(node, Scale):                  # scale the distance back
                 self.lines.append(f"{d} = {d} * P[{first}].x;")
@@ -167,9 +162,9 @@ class SdfWriter:
         k = [f"P[{first}].x"] if takes_k else []
         d, ids = self.node(node.children[0], p)
         result, result_id = self.name("d"), self.name("id")
-        self.lines.append(f"{self.types['real']} {result} = {d};")
+        self.lines.append(f"real {result} = {d};")
         if self.with_ids:
-            self.lines.append(f"{self.types['int']} {result_id} = {ids};")
+            self.lines.append(f"int {result_id} = {ids};")
         for child in node.children[1:]:
             d2, ids2 = self.node(child, p)
             if self.with_ids:
@@ -182,71 +177,58 @@ class SdfWriter:
         return result, result_id
 
 
-def scene_sdf_code(objects, block: ParameterBlock, bounds=None,
-                   types: dict[str, str] = SCALAR_TYPES) -> tuple[str, set[str]]:
+def scene_sdf_code(objects, block: ParameterBlock, bounds=None) -> tuple[str, set[str]]:
     """Source of ``scene_sdf``, ``scene_object_id`` and the marches' ``ray_objects`` and
     ``march_sdf``, and the library functions they use.
 
     ``bounds``, the list of `reference_cpu.culling.culled_bounds`, turns on bounding-sphere
-    culling; None writes a ``march_sdf`` that is ``scene_sdf``. ``types`` is SCALAR_TYPES
-    or, for a packet program, PACKET_TYPES: the same code over one packet of rays.
+    culling; None writes a ``march_sdf`` that is ``scene_sdf``. (A packet program derives
+    its own from this code: gpu_shader/packets.py.)
     """
-    real, vec3, int_, uint = (types[k] for k in ("real", "vec3", "int", "uint"))
     root = scene_root(objects)
     if root is None:
         return ("// An empty scene: every ray misses.\n"
-                f"{real} scene_sdf({vec3} p)\n{{\n    return MAX_DISTANCE * 2.0;\n}}\n\n"
-                f"{int_} scene_object_id({vec3} p)\n{{\n    return -1;\n}}\n\n"
-                + _unculled_march_sdf(types)), set()
-    distances = SdfWriter(block, with_ids=False, types=types)
+                "real scene_sdf(vec3 p)\n{\n    return MAX_DISTANCE * 2.0;\n}\n\n"
+                "int scene_object_id(vec3 p)\n{\n    return -1;\n}\n\n"
+                + _unculled_march_sdf()), set()
+    distances = SdfWriter(block, with_ids=False)
     d, _ = distances.node(root, "p")
-    ids = SdfWriter(block, with_ids=True, replay=distances.rows, types=types)
+    ids = SdfWriter(block, with_ids=True, replay=distances.rows)
     _, object_id = ids.node(root, "p")
     body = "".join(f"    {line}\n" for line in distances.lines)
     id_body = "".join(f"    {line}\n" for line in ids.lines)
     source = (
         "// The distance from p to the nearest surface of the scene.\n"
-        f"{real} scene_sdf({vec3} p)\n{{\n{body}    return {d};\n}}\n\n"
+        f"real scene_sdf(vec3 p)\n{{\n{body}    return {d};\n}}\n\n"
         "// The object id (depth-first index of the primitive) whose distance the tree\n"
         "// chose at p: the same walk, keeping track of ids.\n"
-        f"{int_} scene_object_id({vec3} p)\n{{\n{id_body}    return {object_id};\n}}\n\n")
+        f"int scene_object_id(vec3 p)\n{{\n{id_body}    return {object_id};\n}}\n\n")
     if bounds is None:
-        return source + _unculled_march_sdf(types), distances.used
+        return source + _unculled_march_sdf(), distances.used
     # The union node of several objects allocated the first (empty) entry of the walk.
     replay = distances.rows[1:] if len(objects) > 1 else distances.rows
-    culled, used = _culled_march_sdf(objects, block, bounds, replay, types)
+    culled, used = _culled_march_sdf(objects, block, bounds, replay)
     return source + culled, distances.used | used
 
 
-def _unculled_march_sdf(types) -> str:
-    real, vec3, uint = types["real"], types["vec3"], types["uint"]
+def _unculled_march_sdf() -> str:
     return ("// Bounding-sphere culling is off: every march sees every object.\n"
-            f"{uint} ray_objects({vec3} origin, {vec3} direction)\n{{\n    return 0u;\n}}\n\n"
-            f"{real} march_sdf({vec3} p, {uint} objects)\n{{\n    return scene_sdf(p);\n}}\n")
+            "uint ray_objects(vec3 origin, vec3 direction)\n{\n    return 0u;\n}\n\n"
+            "real march_sdf(vec3 p, uint objects)\n{\n    return scene_sdf(p);\n}\n")
 
 
-def _culled_march_sdf(objects, block: ParameterBlock, bounds, replay,
-                      types) -> tuple[str, set[str]]:
+def _culled_march_sdf(objects, block: ParameterBlock, bounds, replay) -> tuple[str, set[str]]:
     """``ray_objects`` (which bounded objects a ray may reach, one bit each) and ``march_sdf``
     (the union of the objects a ray keeps), as `reference_cpu.culling` and
-    `reference_cpu.scene_sdf.build_scene_sdf` compute them.
-
-    In a packet program each lane keeps its own bits: an object is evaluated if any lane
-    may reach it, and counts only in the lanes that may."""
-    real, vec3, uint = types["real"], types["vec3"], types["uint"]
-    packets = types is PACKET_TYPES
+    `reference_cpu.scene_sdf.build_scene_sdf` compute them."""
     bit = {index: 1 << k for k, (index, _, _) in enumerate(bounds)}
     tests = []
     for index, centre, radius in bounds:
         name = f"BOUND{index}"
         block.named({name: ("xyzw", [*centre, radius])})
-        meets = f"ray_meets_sphere(origin, direction, {name})"
-        if packets:
-            tests.append(f"    objects = {meets} ? objects | {bit[index]}u : objects;\n")
-        else:
-            tests.append(f"    if ({meets}) {{\n"
-                         f"        objects = objects | {bit[index]}u;\n    }}\n")
-    writer = SdfWriter(block, with_ids=False, replay=replay, types=types)
+        tests.append(f"    if (ray_meets_sphere(origin, direction, {name})) {{\n"
+                     f"        objects = objects | {bit[index]}u;\n    }}\n")
+    writer = SdfWriter(block, with_ids=False, replay=replay)
     body = []
     for index, node in enumerate(objects):
         writer.lines = []
@@ -255,22 +237,17 @@ def _culled_march_sdf(objects, block: ParameterBlock, bounds, replay,
             body.append(f"    // object {index} has no bounding sphere: always in\n"
                         + "".join(f"    {line}\n" for line in writer.lines + [f"d = op_union(d, {d});"]))
             continue
-        reaches = f"(objects & {bit[index]}u) != 0u"
-        if packets:
-            lines = writer.lines + [f"d = {reaches} ? op_union(d, {d}) : d;"]
-            reaches = f"any({reaches})"
-        else:
-            lines = writer.lines + [f"d = op_union(d, {d});"]
-        body.append(f"    if ({reaches}) {{\n" + "".join(f"        {line}\n" for line in lines)
-                    + "    }\n")
+        lines = writer.lines + [f"d = op_union(d, {d});"]
+        body.append(f"    if ((objects & {bit[index]}u) != 0u) {{\n"
+                    + "".join(f"        {line}\n" for line in lines) + "    }\n")
     source = (
         "// Bit k of the result is set where the ray may reach the k-th object with a\n"
         "// bounding sphere (BOUNDj: centre, radius widened by 2 epsilon; reference_cpu/\n"
         "// culling.py). Objects without one (planes, endless repetition) are always in.\n"
-        f"{uint} ray_objects({vec3} origin, {vec3} direction)\n{{\n    {uint} objects = 0u;\n"
+        "uint ray_objects(vec3 origin, vec3 direction)\n{\n    uint objects = 0u;\n"
         + "".join(tests) + "    return objects;\n}\n\n"
         "// The scene's distance for one march: the union of the objects its ray may reach\n"
         "// (the others count as infinitely far), in the order of scene_sdf.\n"
-        f"{real} march_sdf({vec3} p, {uint} objects)\n{{\n    {real} d = INFINITY;\n"
+        "real march_sdf(vec3 p, uint objects)\n{\n    real d = INFINITY;\n"
         + "".join(body) + "    return d;\n}\n")
     return source, writer.used | {"op_union"}

@@ -1,6 +1,8 @@
+{# A template: gpu_shader/packets.py fills in the {{ }} parts (Jinja). #}
 // The packet kernel's entry point: one work-item per LANES neighbouring pixels of a row, the
-// twin of main.cl. It writes the same three planes of 4 values per pixel (see main.cl), so
-// the Frame is built the same way (gpu_shader/planes.py).
+// twin of main.cl, calling the packet forms of its functions (gpu_shader/vectorise.py). It
+// writes the same three planes of 4 values per pixel (see main.cl), so the Frame is built
+// the same way (gpu_shader/planes.py).
 //
 // The calls below are written as in GLSL; generating the program passes the parameter buffer
 // P on as their first argument (thread_parameters in gpu_shader/dialects.py).
@@ -12,7 +14,8 @@ __kernel void render(PARAMETERS,
 {
     // Work-item (i, row) holds the pixels first .. first + LANES - 1 of its row, lane k the
     // pixel whose centre is (first + k + 0.5, row + 0.5). Lanes past the image's right edge
-    // (when LANES does not divide the width) are traced nowhere and written nowhere.
+    // (when LANES does not divide the width) are left out of trace's mask `live`: traced
+    // nowhere and written nowhere.
     int first = get_global_id(0) * LANES;
     int row = get_global_id(1);
     if (first >= (int)(IMAGE_WIDTH) || row >= (int)(IMAGE_HEIGHT)) {
@@ -22,29 +25,21 @@ __kernel void render(PARAMETERS,
     ipacket inside = column < (int)(IMAGE_WIDTH);
     packet x = convert_packet(column) + 0.5;
     packet y = (real)(row) + 0.5;
-    vec3p origin = splat3(CAMERA_POSITION);
     vec3p direction = camera_ray(x, y);
-    Hit h = march(origin, direction, MAX_DISTANCE, inside);
+    Pixel px = trace(splat3(CAMERA_POSITION), direction, inside);
 
-    vec3p n = splat3(vec3(0.0));
-    ipacket id = -1;
-    if (any(h.hit)) {
-        vec3p p = add(origin, mul(h.t, direction));
-        n = choose(h.hit, estimate_normal(p), n);
-        id = h.hit ? scene_object_id(p) : id;
-    }
-    vec4p color_path = pixel_color(origin, direction, h, n, id);
-
-    vec3p color = clamp(color_path.xyz, 0.0, 1.0);
-    packet hit = h.hit ? (packet)(1.0) : (packet)(0.0);
-    packet depth = h.hit ? h.t : (packet)(INFINITY);
+    Hit h = px.primary;
+    vec3p color = clamp(px.color, 0.0, 1.0);
+    packet hit = convert_packet(h.hit);
+    packet depth = h.hit == 1 ? h.t : (packet)(INFINITY);
     packet steps = convert_packet(h.steps);
-    packet object = convert_packet(id);
+    packet object = convert_packet(px.id);
+    packet path = {{ "px.path" if path_labels else "0.0" }};
     int lanes = min(LANES, (int)(IMAGE_WIDTH) - first);
     for (int k = 0; k < lanes; k++) {
         int pixel = row * (int)(IMAGE_WIDTH) + first + k;
         color_hit[pixel] = vec4(color.x[k], color.y[k], color.z[k], hit[k]);
-        normal_depth[pixel] = vec4(n.x[k], n.y[k], n.z[k], depth[k]);
-        steps_id[pixel] = vec4(steps[k], object[k], color_path.w[k], 0.0);
+        normal_depth[pixel] = vec4(px.normal.x[k], px.normal.y[k], px.normal.z[k], depth[k]);
+        steps_id[pixel] = vec4(steps[k], object[k], path[k], 0.0);
     }
 }

@@ -1,10 +1,11 @@
-"""Run a building block and its packet twin on the same inputs, to check they agree to the bit.
+"""Run building blocks and their derived packet forms on the same inputs, to check they agree to the bit.
 
-Every function of the one-ray OpenCL program (``glsl/*.glsl``) has a twin in the packet
-program (``glsl/*_packet.cl``) that computes the same thing for LANES rays at once. A test
-writes a small kernel ``twin`` twice, once over scalars and once over packets, around the
-functions it checks; `run_twins` builds each with its dialect's prelude, feeds both the same
-rows of inputs and returns both outputs.
+The packet program is derived from the one-ray program (gpu_shader/vectorise.py): every
+function of the building blocks (``glsl/*.glsl``) gets a packet form that computes the same
+thing for LANES rays at once. A test writes a small kernel ``twin`` twice, once over scalars
+and once over packets, around the functions it checks; `derive` writes the packet form of
+the functions as the packet program does, `run_twins` builds each program with its
+dialect's prelude, feeds both the same rows of inputs and returns both outputs.
 
 The scalar kernel runs one work-item per input row and reads its inputs as ``IN(c)`` (column
 c of its row) and writes ``OUT(c, value)``. The packet kernel runs one work-item per LANES
@@ -19,14 +20,14 @@ from a packet. So the two kernels read alike::
 
 To check many functions at once, a test lists them as `Case` rows (library, name, argument
 and result kinds, a function that draws the inputs) and hands them to `TwinCases`, which
-writes both kernels itself, calling every function on its own input columns, and builds and
-runs them once per precision (`TwinCases.run`, `TwinCases.results`).
+writes both kernels itself, calling every function on its own input columns, derives the
+packet forms with each case's arguments varying as its kinds say (a parameter the same in
+every lane stays scalar), and builds and runs them once per precision (`TwinCases.run`,
+`TwinCases.results`).
 
-The inputs are seeded random rows with the hard cases mixed in, drawn with `mix` (row by
-row, or packet by packet, one of several arrays), `per_packet` (a parameter, the same for
-the LANES rows of a packet), `pick`, `units`, `normalised` and `near` (just beside a
-value); each test file keeps its own seed and sizes. `assert_bits_equal`, `need_precision`,
-`assert_twin_names` and `TwinCases.assert_checks_all` are the checks the test files share.
+The inputs are seeded random rows with the hard cases mixed in (tests/opencl/twin_inputs.py).
+`assert_bits_equal`, `need_precision` and `TwinCases.assert_checks_all` are the checks the
+test files share.
 """
 
 from __future__ import annotations
@@ -37,9 +38,13 @@ from typing import Callable
 import numpy as np
 import pytest
 
-from gpu_shader.dialects import PACKET_LANES, dialect
+from gpu_shader.dialects import PACKET_LANES, dialect, thread_parameters
 from gpu_shader.library import load_library
 from gpu_shader.opencl import build_options
+from gpu_shader.packets import choose_functions, program_structs
+from gpu_shader.subset import Define, Program, format_program
+from gpu_shader.subset_reader import parse
+from gpu_shader.vectorise import vectorise
 
 LANES = PACKET_LANES
 
@@ -73,14 +78,53 @@ void out_column(__global real* out, int c, packet value)
 """
 
 
+def define_lines(defines: dict | None) -> str:
+    return "".join(f"#define {name} {value}\n" for name, value in (defines or {}).items())
+
+
+def derive(functions: str, roots: dict, live_roots=(), defines: dict | None = None,
+           structs: bool = False) -> tuple:
+    """The packet form of the one-ray ``functions``, as the packet program derives it.
+
+    Parameters
+    ----------
+    functions : str
+        One-ray source: building blocks, a scene's SDF, ...
+    roots : dict
+        Function name -> whether each of its parameters varies where the test kernel calls
+        it (the others are the same in every lane, scalar).
+    live_roots : iterable of str
+        Functions that take the mask ``live`` whatever they hold.
+    defines : dict, optional
+        The ``#define`` lines the functions read (and ``#if`` decides on).
+    structs : bool
+        Whether to start with the packet structs and their ``choose`` (Hit, LightSample...).
+
+    Returns
+    -------
+    source : str
+        The packet functions (without ``defines``: `run_twins` writes those).
+    analysis : gpu_shader.varying.Analysis
+        What varies, which function takes ``live``.
+    """
+    table = program_structs(False)
+    program = parse(define_lines(defines) + functions, table)
+    packet, analysis = vectorise(program, table, roots, live_roots)
+    given = set(defines or {})
+    text = format_program(Program([i for i in packet.items
+                                   if not (isinstance(i, Define) and i.name in given)]))
+    return (choose_functions(table) + text) if structs else text, analysis
+
+
 def _program(prelude: str, access: str, source: str, defines: dict, columns: tuple) -> str:
-    lines = [f"#define {name} {value}" for name, value in defines.items()]
-    lines += [f"#define IN_COLUMNS {columns[0]}", f"#define OUT_COLUMNS {columns[1]}"]
+    lines = [define_lines(defines), f"#define IN_COLUMNS {columns[0]}",
+             f"#define OUT_COLUMNS {columns[1]}"]
     return "\n".join([prelude, *lines, access, source])
 
 
 def run_twins(device, precision: str, scalar_source: str, packet_source: str,
-              inputs: np.ndarray, outputs: int, defines: dict | None = None):
+              inputs: np.ndarray, outputs: int, defines: dict | None = None,
+              parameters: np.ndarray | None = None):
     """Outputs of the scalar and the packet kernel ``twin`` over the rows of ``inputs``.
 
     Parameters
@@ -89,12 +133,19 @@ def run_twins(device, precision: str, scalar_source: str, packet_source: str,
     precision : {"float32", "float64"}
     scalar_source, packet_source : str
         The functions under test and a kernel
-        ``__kernel void twin(__global const real* in, __global real* out)`` in each form.
+        ``__kernel void twin(__global const real* in, __global real* out)`` in each form
+        (the packet functions from `derive`).
     inputs : (N, K) array
         One row per ray; N need not be a multiple of LANES (the last packet is padded by
         repeating the last row).
     outputs : int
         M, the number of output columns.
+    defines : dict, optional
+        ``#define`` lines for both programs.
+    parameters : (R, 4) array, optional
+        Rows of a parameter block ``P`` (``U``), as the real program receives them: the
+        kernels are then ``twin(PARAMETERS, in, out)`` and every function that reads the
+        rows gets them passed on (`gpu_shader.dialects.thread_parameters`).
 
     Returns
     -------
@@ -114,90 +165,27 @@ def run_twins(device, precision: str, scalar_source: str, packet_source: str,
             (dialect("opencl", precision).prelude, _SCALAR_ACCESS, scalar_source, padded),
             (dialect("opencl-packets", precision).prelude, _PACKET_ACCESS, packet_source,
              padded // LANES)):
+        flags = cl.mem_flags
+        buffers = []
+        if parameters is not None:
+            receive = dialect("opencl", precision).declare_parameters(len(parameters), 0, 0)
+            source = f"{receive}#define PARAMETER_ROWS {len(parameters)}\n{source}"
+            buffers.append(cl.Buffer(device.context, flags.READ_ONLY | flags.COPY_HOST_PTR,
+                                     hostbuf=np.ascontiguousarray(parameters, dtype=dtype)))
         text = _program(prelude, access, source, defines, columns)
+        if parameters is not None:
+            text = thread_parameters(text)
         program = cl.Program(device.context, text).build(
             options=build_options(cl, device, precision))
-        flags = cl.mem_flags
-        in_buffer = cl.Buffer(device.context, flags.READ_ONLY | flags.COPY_HOST_PTR,
-                              hostbuf=np.ascontiguousarray(rows))
+        buffers.append(cl.Buffer(device.context, flags.READ_ONLY | flags.COPY_HOST_PTR,
+                                 hostbuf=np.ascontiguousarray(rows)))
         out = np.zeros((padded, outputs), dtype)
         out_buffer = cl.Buffer(device.context, flags.WRITE_ONLY, out.nbytes)
-        program.twin(device.queue, (work_items,), None, in_buffer, out_buffer)
+        program.twin(device.queue, (work_items,), None, *buffers, out_buffer)
         cl.enqueue_copy(device.queue, out, out_buffer)
         device.queue.finish()
         results.append(out[:n])
     return results[0], results[1]
-
-
-# --- Inputs: seeded random rows, with the hard cases mixed in -----------------------------
-
-def mix(rng, *options) -> np.ndarray:
-    """Entry by entry along the first axis, one of ``options`` at random.
-
-    Parameters
-    ----------
-    rng : numpy.random.Generator
-    *options : array_like
-        Broadcast to one shape (n, ...): rows of inputs, or (blocks, ...) values of a
-        parameter to choose packet by packet. At least one must have that shape.
-
-    Returns
-    -------
-    (n, ...) ndarray
-    """
-    shape = np.broadcast_shapes(*map(np.shape, options))
-    stacked = np.stack([np.broadcast_to(o, shape) for o in options])
-    return stacked[rng.integers(len(options), size=shape[0]), np.arange(shape[0])]
-
-
-def per_packet(values) -> np.ndarray:
-    """One value (or row of k values) per packet, repeated for the LANES rows of its packet.
-
-    Parameters
-    ----------
-    values : (blocks,) or (blocks, k) array_like
-
-    Returns
-    -------
-    (blocks * LANES, k) ndarray
-    """
-    values = np.asarray(values, float)
-    return np.repeat(values.reshape(len(values), -1), LANES, axis=0)
-
-
-def pick(rng, choices, shape) -> np.ndarray:
-    """An array of ``shape`` values drawn from ``choices``, each equally likely."""
-    return np.asarray(choices, float)[rng.integers(len(choices), size=shape)]
-
-
-def units(rng, n: int) -> np.ndarray:
-    """(n, 3) random unit vectors, uniform over the sphere."""
-    return normalised(rng.normal(size=(n, 3)))
-
-
-def normalised(v) -> np.ndarray:
-    """``v`` divided by its length along the last axis."""
-    return v / np.linalg.norm(v, axis=-1, keepdims=True)
-
-
-def near(rng, values, exponents: tuple) -> np.ndarray:
-    """``values`` a relative 10**e off, either way, for e uniform in ``exponents``.
-
-    Parameters
-    ----------
-    rng : numpy.random.Generator
-    values : (n, ...) ndarray
-    exponents : (low, high)
-        E.g. (-7, -2): from 1e-7 to 1e-2 off, just inside to well outside a surface.
-
-    Returns
-    -------
-    (n, ...) ndarray
-        One offset per entry along the first axis (per row).
-    """
-    shape = (len(values),) + (1,) * (np.ndim(values) - 1)
-    offset = rng.choice([-1.0, 1.0], size=shape) * 10.0 ** rng.uniform(*exponents, size=shape)
-    return values * (1.0 + offset)
 
 
 # --- Many functions in one kernel ---------------------------------------------------------
@@ -217,12 +205,12 @@ RESULT_WIDTHS = {"packet": 1, "vec3p": 3, "upacket": 1, "mask": 1, "LightSample"
 
 @dataclass(frozen=True)
 class Case:
-    """One function of a scalar library (and, by the same name, of its packet twin).
+    """One function of a scalar library, checked against its derived packet form.
 
     Parameters
     ----------
     library : str
-        The scalar library, e.g. "sdf"; the twin is `twin_library` of it.
+        The scalar library, e.g. "sdf" (glsl/sdf.glsl).
     name : str
     arguments : tuple of str
         The kinds of its arguments (keys of WIDTHS).
@@ -237,11 +225,6 @@ class Case:
     arguments: tuple[str, ...]
     result: str
     inputs: Callable
-
-
-def twin_library(library: str) -> str:
-    """The name of the packet twin of the scalar library ``library``."""
-    return library + "_packet"
 
 
 def _argument(kind: str, reads: list, packet: bool) -> str:
@@ -299,9 +282,11 @@ class TwinCases:
         self.defines, self.structs = defines, structs
         self._runs: dict = {}
 
-    def kernel(self, form: str) -> str:
+    def kernel(self, form: str, uniform_results=frozenset()) -> str:
         """The kernel that calls every case's function once per row (``form`` "scalar")
-        or once per packet of rows (``form`` "packet")."""
+        or once per packet of rows (``form`` "packet"). The packet forms of the functions
+        named in ``uniform_results`` return one value for every lane (background_solid's
+        colour), which the kernel widens to a packet."""
         packet = form == "packet"
         lines, column, out = [], 0, 0
         for case in self.cases:
@@ -310,24 +295,45 @@ class TwinCases:
                 reads = [f"IN({column + i})" for i in range(WIDTHS[kind])]
                 arguments.append(_argument(kind, reads, packet))
                 column += WIDTHS[kind]
-            lines += _writes(case.result, f"{case.name}({', '.join(arguments)})", out, packet)
+            call = f"{case.name}({', '.join(arguments)})"
+            if packet and case.name in uniform_results:
+                call = f"splat3({call})" if case.result == "vec3p" else f"(packet)({call})"
+            lines += _writes(case.result, call, out, packet)
             out += RESULT_WIDTHS[case.result]
         return "\n".join(["__kernel void twin(__global const real* in, __global real* out)",
                           "{", *lines, "}", ""])
 
-    def sources(self, form: str, precision: str) -> str:
-        """The program of ``form`` ("scalar" or "packet"): the cases' functions (and all they
-        call) from their libraries, and the kernel."""
+    def scalar_functions(self) -> str:
+        """The cases' functions and all they call, from their libraries."""
         names: dict = {}
         for case in self.cases:
             names.setdefault(case.library, []).append(case.name)
+        return "\n".join(load_library(library).select(wanted)
+                         for library, wanted in names.items())
+
+    def packet_functions(self) -> tuple:
+        """The packet form of `scalar_functions`, each case's arguments varying as its kinds
+        say (checked), and the names of those whose result is the same in every lane."""
+        roots = {case.name: tuple(kind in PER_RAY for kind in case.arguments)
+                 for case in self.cases}
+        source, analysis = derive(self.scalar_functions(), roots, defines=self.defines,
+                                  structs=self.structs)
+        for name, flags in roots.items():
+            got = tuple(p.varying for p in analysis.functions[name].parameters)
+            assert got == flags, f"{name}: parameters vary as {got}, the case says {flags}"
+        uniform = {name for name in roots if not analysis.functions[name].returns_varying}
+        return source, frozenset(uniform)
+
+    def sources(self, form: str, precision: str) -> str:
+        """The program of ``form`` ("scalar" or "packet"): the cases' functions (and all they
+        call) in that form, and the kernel."""
         packet = form == "packet"
-        blocks = [load_library(twin_library(library) if packet else library).select(wanted)
-                  for library, wanted in names.items()]
+        functions, uniform = self.packet_functions() if packet else (self.scalar_functions(), ())
+        blocks = [functions]
         if self.structs:
             blocks.insert(0, dialect("opencl-packets" if packet else "opencl",
                                      precision).structs())
-        return "\n".join([*blocks, self.kernel(form)])
+        return "\n".join([*blocks, self.kernel(form, frozenset(uniform))])
 
     def inputs(self) -> tuple[np.ndarray, dict]:
         """All cases' input columns side by side, and each case's output columns.
@@ -367,20 +373,13 @@ class TwinCases:
         return scalar[:, outputs[name]], packet[:, outputs[name]]
 
     def assert_checks_all(self, library: str):
-        """Every function of ``library`` (so of its twin) is one of the cases."""
+        """Every function of ``library`` is one of the cases."""
         checked = sorted(case.name for case in self.cases if case.library == library)
         names = sorted(load_library(library).names())
         assert checked == names, f"{library}: cases {checked}, functions {names}"
 
 
 # --- Checks -------------------------------------------------------------------------------
-
-def assert_twin_names(library: str):
-    """The twin of ``library`` defines the same functions, by name, in the same order."""
-    scalar = load_library(library).names()
-    packet = load_library(twin_library(library)).names()
-    assert packet == scalar, f"{twin_library(library)}: {packet}, {library}: {scalar}"
-
 
 def need_precision(device, precision: str):
     """Skip the calling test where ``device`` has no ``precision``."""

@@ -1,20 +1,21 @@
-"""The packet marches and shadow rays compute what the scalar ones do, ray by ray, to the bit.
+"""The derived packet marches and shadow rays compute what the scalar ones do, ray by ray, to the bit.
 
-glsl/march_packet.cl and glsl/relaxed_packet.cl are the twins of march.glsl and relaxed.glsl:
-the LANES rays of a packet step together, and a ray that stops (hit, escaped, out of steps,
-or never live) leaves a mask instead of the loop. Each ray must still go through exactly the
+The packet program derives its march from glsl/march.glsl (or relaxed.glsl) and its shadow
+rays from march.glsl and shadow_pair.glsl (gpu_shader/vectorise.py): the LANES rays of a
+packet step together, and a ray that stops (hit, escaped, out of steps) leaves the mask of
+the lanes still in the loop instead of the loop. Each ray must still go through exactly the
 scalar sequence of points, so t, the step count, the hit flag and the shadow visibility must
 equal the scalar program's at both precisions (tests/opencl/packet_twins.py runs both).
 
 The scene is a sphere resting on a tilted plane beside a thin box (a relaxed step can jump
-into or through it, so the march has to step back), written once with the scalar building
-blocks of glsl/sdf.glsl and once by hand with the packet helpers, the same operations in the
-same order. The rays are seeded random rows with the hard cases mixed in: grazing rays over
-the plane and past the sphere, rays starting inside the solids, rays that run out of
-MAX_STEPS (far targets, 64 steps), rays that escape at a small limit, hits just before and
-just after the limit, shadow rays from surface points toward lights, and rays that are not
-live (hit 0, t -1, steps 0, visibility 1). Every march runs once more with only 5 steps,
-so that most rays stop in mid-march, after whatever kind of step came last.
+into or through it, so the march has to step back), written with the scalar building blocks
+of glsl/sdf.glsl; its packet form is derived like the rest. The rays are seeded random rows
+with the hard cases mixed in: grazing rays over the plane and past the sphere, rays starting
+inside the solids, rays that run out of MAX_STEPS (far targets, 64 steps), rays that escape
+at a small limit, hits just before and just after the limit, shadow rays from surface
+points toward lights, and lanes outside the mask `live`, which the packet march must leave
+alone. Every march runs once more with only 5 steps, so that most rays stop in mid-march,
+after whatever kind of step came last.
 """
 
 from __future__ import annotations
@@ -27,8 +28,8 @@ from gpu_shader.library import load_library
 from reference_cpu.relaxation import SLOPE_WEIGHT
 
 # tests/opencl, on the path as the tests' folder
-from packet_twins import (LANES, assert_bits_equal, need_precision, normalised, run_twins,
-                          units)
+from packet_twins import LANES, assert_bits_equal, derive, need_precision, run_twins
+from twin_inputs import normalised, units
 
 SEED = 20240612
 PRECISIONS = ["float32", "float64"]
@@ -77,51 +78,26 @@ real march_sdf(vec3 p, uint objects)
 }
 """
 
-# The same operations as sdf_sphere, sdf_plane, sdf_box, op_translate and op_union of
-# glsl/sdf.glsl, written inline (the plane's unit normal is a parameter: scalar in both).
-PACKET_SCENE = SCENE + """
-packet scene_sdf(vec3p p)
-{
-    packet sphere = length(sub(p, SPHERE_CENTRE)) - SPHERE_RADIUS;
-    vec3 n = NORMAL / sqrt(dot(NORMAL, NORMAL));
-    packet plane = dot(p, n) - OFFSET;
-    vec3p q = sub(abs(sub(p, BOX_CENTRE)), BOX_SIZE);
-    packet outside = length(max(q, 0.0));
-    packet inside = min(max(q.x, max(q.y, q.z)), 0.0);
-    packet box = outside + inside;
-    return min(min(sphere, plane), box);
-}
-
-upacket ray_objects(vec3p origin, vec3p direction)
-{
-    return 0u;
-}
-
-packet march_sdf(vec3p p, upacket objects)
-{
-    return scene_sdf(p);
-}
-"""
-
-# Columns: origin (3), direction (3), limit, live. The shadow functions take the same rows
-# as (origin, to_light, light_distance). Outputs: t, steps, hit, hard, soft.
+# Columns: origin (3), direction (3), limit, live, then a second ray from the same origin for
+# the shadow rays in pairs: direction (3), limit, and whether each ray of the pair is needed.
+# The shadow functions take the first ray as (origin, to_light, light_distance). Outputs: t,
+# steps, hit, hard, soft, and the two visibilities of hard_shadow_pair.
 SCALAR_KERNEL = """
 __kernel void twin(__global const real* in, __global real* out)
 {
     vec3 origin = vec3(IN(0), IN(1), IN(2));
     vec3 direction = vec3(IN(3), IN(4), IN(5));
     real limit = IN(6);
-    if (IN(7) == 0.0) {
-        // what the packet program must give a lane that is not live
-        OUT(0, -1.0); OUT(1, 0.0); OUT(2, 0.0); OUT(3, 1.0); OUT(4, 1.0);
-        return;
-    }
     Hit hit = march(origin, direction, limit);
     OUT(0, hit.t);
     OUT(1, (real)(hit.steps));
     OUT(2, (real)(hit.hit));
     OUT(3, hard_shadow(origin, direction, limit));
     OUT(4, soft_shadow(origin, direction, limit));
+    vec2 pair = hard_shadow_pair(origin, direction, limit, IN(12) != 0.0,
+                                 vec3(IN(8), IN(9), IN(10)), IN(11), IN(13) != 0.0);
+    OUT(5, pair.x);
+    OUT(6, pair.y);
 }
 """
 
@@ -138,8 +114,17 @@ __kernel void twin(__global const real* in, __global real* out)
     OUT(2, hit.hit);
     OUT(3, hard_shadow(origin, direction, limit, live));
     OUT(4, soft_shadow(origin, direction, limit, live));
+    vec2p pair = hard_shadow_pair(origin, direction, limit, IN(12) != 0.0,
+                                  pack3(IN(8), IN(9), IN(10)), IN(11), IN(13) != 0.0, live);
+    OUT(5, pair.x);
+    OUT(6, pair.y);
 }
 """
+OUTPUTS = 7
+# The functions the kernels call, every argument varying (one value per ray), and the mask
+# `live` that the packet forms take (they hold loops that rays leave at different times).
+ROOTS = {"march": (True,) * 3, "hard_shadow": (True,) * 3, "soft_shadow": (True,) * 3,
+         "hard_shadow_pair": (True,) * 7}
 
 # "plain": glsl/march.glsl; the relaxed marches replace its march and keep its shadow
 # functions, as the generator puts them together (gpu_shader/generate.py, march_parts).
@@ -156,19 +141,19 @@ RUN_IDS = [f"{variant}-{steps}-steps" for variant, steps in RUNS]
 
 
 def sources(variant: str, precision: str, packet: bool) -> str:
+    """The scalar program of a variant, or its derived packet form, with its kernel."""
     library, _ = VARIANTS[variant]
-    suffix = "_packet" if packet else ""
-    blocks = [dialect("opencl-packets" if packet else "opencl", precision).structs()]
+    functions = "\n".join([
+        load_library("sdf").select(["sdf_sphere", "sdf_plane", "sdf_box", "op_translate",
+                                    "op_union"]),
+        SCALAR_SCENE,
+        load_library(library).select(["march"]),
+        load_library("march").select(["hard_shadow", "soft_shadow"], provided={"march"}),
+        load_library("shadow_pair").select(["hard_shadow_pair"])])
     if packet:
-        blocks.append(PACKET_SCENE)
-    else:
-        blocks += [load_library("sdf").select(["sdf_sphere", "sdf_plane", "sdf_box",
-                                                "op_translate", "op_union"]), SCALAR_SCENE]
-    shadows = load_library("march" + suffix).select(["hard_shadow", "soft_shadow"],
-                                                     provided={"march"})
-    blocks += [load_library(library + suffix).select(["march"]), shadows]
-    blocks.append(PACKET_KERNEL if packet else SCALAR_KERNEL)
-    return "\n".join(blocks)
+        functions, _ = derive(functions, ROOTS, defines=defines(variant, MAX_STEPS, precision))
+    blocks = [dialect("opencl-packets" if packet else "opencl", precision).structs(), functions]
+    return "\n".join(blocks + [PACKET_KERNEL if packet else SCALAR_KERNEL])
 
 
 def defines(variant: str, max_steps: int, precision: str) -> dict:
@@ -188,7 +173,8 @@ def plane_distance(p) -> np.ndarray:
 
 
 def rays(rng, n=96) -> np.ndarray:
-    """Rows (origin, direction, limit, live) of every kind, about n of each, shuffled."""
+    """Rows (origin, direction, limit, live, direction_b, limit_b, need_a, need_b) of every
+    kind, about n of each, shuffled; the second ray of a pair is another row's."""
     kinds = []
     uniform = lambda low, high: rng.uniform(low, high, (n, 3))          # noqa: E731
     # anywhere above the plane, in any direction
@@ -247,7 +233,9 @@ def rays(rng, n=96) -> np.ndarray:
     live = (rng.random(len(rows)) > 0.15).astype(float)
     live[:LANES] = 0.0                            # a whole packet off: the loop never runs
     live[LANES:2 * LANES] = 1.0
-    rows = np.hstack([rows, live[:, None]])
+    other = rows[rng.permutation(len(rows))]
+    needs = (rng.random((len(rows), 2)) > 0.2).astype(float)
+    rows = np.hstack([rows, live[:, None], other[:, 3:7], needs])
     return rows[:len(rows) // LANES * LANES]
 
 
@@ -260,7 +248,7 @@ def run(device, variant: str, max_steps: int, precision: str):
     if key not in _RUNS:
         rows = rays(np.random.default_rng(SEED))
         scalar, packet = run_twins(device, precision, sources(variant, precision, False),
-                                   sources(variant, precision, True), rows, outputs=5,
+                                   sources(variant, precision, True), rows, outputs=OUTPUTS,
                                    defines=defines(variant, max_steps, precision))
         _RUNS[key] = rows, scalar, packet
     return _RUNS[key]
@@ -283,8 +271,8 @@ def live_run(device, precision: str, variant: str, max_steps: int):
 # --- Tests --------------------------------------------------------------------------------
 
 @each_run
-def test_packet_march_equals_scalar_march_to_the_bit(opencl_device, precision, variant,
-                                                      max_steps):
+def test_packet_march_equals_scalar_march_to_the_bit_in_every_live_lane(
+        opencl_device, precision, variant, max_steps):
     live, scalar, packet = live_run(opencl_device, precision, variant, max_steps)
     t, steps, hit = scalar[:, 0], scalar[:, 1], scalar[:, 2]
     # the rays reach every outcome: hits, escapes, out of steps, and long marches
@@ -293,34 +281,45 @@ def test_packet_march_equals_scalar_march_to_the_bit(opencl_device, precision, v
     assert (live & (hit == 0) & (steps < max_steps)).sum() > 50
     assert ran_out.sum() > (10 if max_steps == MAX_STEPS else 200)
     assert np.median(steps[live]) > (5 if max_steps == MAX_STEPS else 2)
-    # the packet hit is a mask: -1 on a hit, 0 elsewhere
-    assert set(np.unique(packet[:, 2])) == {-1.0, 0.0}
     what = f"{variant}, {max_steps} steps"
-    assert_bits_equal(packet[:, 0], t, f"{what}: t")
-    np.testing.assert_array_equal(packet[:, 1], steps, err_msg=f"{what}: steps")
-    np.testing.assert_array_equal(-packet[:, 2], hit, err_msg=f"{what}: hit")
+    assert_bits_equal(packet[live, 0], t[live], f"{what}: t")
+    np.testing.assert_array_equal(packet[live, 1], steps[live], err_msg=f"{what}: steps")
+    np.testing.assert_array_equal(packet[live, 2], hit[live], err_msg=f"{what}: hit")
 
 
 @each_run
-def test_packet_shadows_equal_scalar_shadows_to_the_bit(opencl_device, precision, variant,
-                                                        max_steps):
+def test_packet_shadows_equal_scalar_shadows_to_the_bit_in_every_live_lane(
+        opencl_device, precision, variant, max_steps):
     live, scalar, packet = live_run(opencl_device, precision, variant, max_steps)
     hard, soft = scalar[:, 3], scalar[:, 4]
     assert (live & (hard == 0)).sum() > 50 and (live & (hard == 1)).sum() > 50
     assert (live & (soft > 0) & (soft < 1)).sum() > 50      # penumbrae, not just 0 and 1
     what = f"{variant}, {max_steps} steps"
-    assert_bits_equal(packet[:, 3], hard, f"{what}: hard_shadow")
-    assert_bits_equal(packet[:, 4], soft, f"{what}: soft_shadow")
+    assert_bits_equal(packet[live, 3], hard[live], f"{what}: hard_shadow")
+    assert_bits_equal(packet[live, 4], soft[live], f"{what}: soft_shadow")
 
 
 @each_run
-def test_lanes_that_are_not_live_are_not_marched(opencl_device, precision, variant,
-                                                 max_steps):
+def test_shadow_rays_in_pairs_equal_their_scalar_form_in_every_live_lane(
+        opencl_device, precision, variant, max_steps):
+    live, scalar, packet = live_run(opencl_device, precision, variant, max_steps)
+    pair = scalar[:, 5:7]
+    for k in range(2):                  # each ray of the pair is blocked and visible somewhere
+        assert (live & (pair[:, k] == 0)).sum() > 50 and (live & (pair[:, k] == 1)).sum() > 50
+    assert_bits_equal(packet[live, 5:7], pair[live], f"{variant}, {max_steps} steps: pairs")
+
+
+@each_run
+def test_lanes_outside_live_are_never_stepped(opencl_device, precision, variant, max_steps):
+    """The march leaves a lane outside its mask as the loop found it: t still 0 and the
+    step counter at its first value, 1 (what the rest of the march makes of those is never
+    read: callers take only their live lanes)."""
     live, _, packet = live_run(opencl_device, precision, variant, max_steps)
     off = ~live
     assert off.sum() > LANES                      # a whole packet, and lanes among live ones
-    np.testing.assert_array_equal(packet[off], np.tile([-1.0, 0.0, 0.0, 1.0, 1.0],
-                                                        (off.sum(), 1)))
+    np.testing.assert_array_equal(packet[off, 0], 0.0)
+    np.testing.assert_array_equal(packet[off, 1], 1.0)
+    assert (packet[live, 0] != 0).mean() > 0.9
 
 
 def test_relaxed_marches_take_other_steps_than_the_plain_one(opencl_device):

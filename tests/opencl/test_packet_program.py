@@ -1,10 +1,11 @@
 """The packet program renders the frames the one-ray program renders.
 
-The opencl backend runs the packet program (`gpu_shader.generate_packets`): LANES pixels of
-a row per work-item, as vectors. The one-ray program is the line-by-line twin of the GLSL
-shader, already held to the NumPy reference by the equivalence suite. Lane by lane the
-packet program does the same operations in the same order, so on every equivalence case
-(each bundled scene and each feature) both must agree:
+The opencl backend runs the packet program: LANES pixels of a row per work-item, as
+vectors, its functions derived from the one-ray program's (gpu_shader/vectorise.py). The
+one-ray program is the line-by-line twin of the GLSL shader, already held to the NumPy
+reference by the equivalence suite. Lane by lane the packet program does the same
+operations in the same order, so on every equivalence case (each bundled scene and each
+feature) both must agree:
 
 - to the bit in the hit mask, step counts, object ids, path labels, depths and normals: the
   march, the SDF and the normal are exact IEEE arithmetic and square roots;
@@ -50,16 +51,17 @@ def test_packet_program_renders_the_one_ray_frame(opencl_device, name, scene, si
     if precision == "float64" and not opencl_device.fp64:
         pytest.skip(f"{opencl_device.label} has no float64")
     width, height = size
-    packets = opencl.render(scene, width, height, precision)
-    one_ray = opencl.render(scene, width, height, precision, packets=False)
+    packets = opencl.render(scene, width, height, precision, path_labels=True)
+    one_ray = opencl.render(scene, width, height, precision, packets=False, path_labels=True)
     assert packets.hit.any() and not packets.hit.all() or name.startswith("scene:")
+    assert packets.path is not None
     assert_same_frame(packets, one_ray, f"{name} {precision}")
 
 
 @pytest.mark.parametrize("width", [PACKET_LANES - 3, 2 * PACKET_LANES + 5, 1])
 def test_packets_cut_by_the_right_edge_write_exactly_the_image(opencl_device, width):
     name, scene, _ = CASES[0]
-    packets = opencl.render(scene, width, 9, "float32")
-    one_ray = opencl.render(scene, width, 9, "float32", packets=False)
+    packets = opencl.render(scene, width, 9, "float32", path_labels=True)
+    one_ray = opencl.render(scene, width, 9, "float32", packets=False, path_labels=True)
     assert packets.color.shape == (9, width, 3)
     assert_same_frame(packets, one_ray, f"{name} at {width}x9")

@@ -1,11 +1,11 @@
-"""The packet twins of the distance functions, culling and camera compute what the scalar ones do.
+"""The derived packet forms of the distance functions, culling and camera compute what the scalar ones do.
 
-The packet program (docs/opencl-backend.md) traces LANES rays per work-item with its own copy
-of every building block: glsl/sdf_packet.cl, culling_packet.cl and camera_packet.cl are the
-twins of sdf.glsl, culling.glsl and camera.glsl, function for function and name for name.
-A packet image equals the one-ray image only if each twin computes, lane by lane, the same
-operations in the same order as its scalar function, so here both run on the same inputs
-(tests/opencl/packet_twins.py) and must agree to the bit, at both precisions.
+The packet program (docs/opencl-backend.md) traces LANES rays per work-item; its functions
+are derived from the one-ray program's (gpu_shader/vectorise.py). A packet image equals the
+one-ray image only if each derived function computes, lane by lane, the same operations in
+the same order as its scalar function, so here the building blocks of sdf.glsl, culling.glsl
+and camera.glsl and their packet forms run on the same inputs (tests/opencl/packet_twins.py)
+and must agree to the bit, at both precisions.
 
 The inputs are seeded random rows with the hard cases mixed in: points on and near each
 surface, on the axes and coordinate planes, at zero, far away (~1e3); distances that are
@@ -21,8 +21,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from packet_twins import (LANES, Case, TwinCases, assert_bits_equal, assert_twin_names, mix,
-                          near, need_precision, per_packet, pick, units)
+from packet_twins import LANES, Case, TwinCases, assert_bits_equal, need_precision
+from twin_inputs import mix, near, per_packet, pick, units
 
 from scene_model.builder import Camera
 from scene_model.camera import camera_basis
@@ -33,7 +33,7 @@ ROWS = BLOCKS * LANES
 PRECISIONS = ["float32", "float64"]
 NEAR = (-7, -2)              # `near`: a relative 1e-7..1e-2 off, just inside and just outside
 
-# the scalar libraries whose packet twins (sdf_packet, ...) are checked here
+# the scalar libraries whose packet forms are checked here
 LIBRARIES = ["sdf", "culling", "camera"]
 
 
@@ -327,20 +327,15 @@ TWINS = TwinCases(CASES, SEED, ROWS, defines=camera_defines())
 # --- Tests --------------------------------------------------------------------------------
 
 @pytest.mark.parametrize("library", LIBRARIES)
-def test_every_scalar_function_has_a_packet_twin_of_the_same_name_in_the_same_order(library):
-    assert_twin_names(library)
-
-
-@pytest.mark.parametrize("library", LIBRARIES)
-def test_every_packet_twin_is_checked_here(library):
+def test_every_function_of_the_library_is_checked_here(library):
     TWINS.assert_checks_all(library)
 
 
 @pytest.mark.parametrize("case", CASES, ids=CASE_IDS)
 @pytest.mark.parametrize("precision", PRECISIONS)
-def test_packet_twin_equals_scalar_function_to_the_bit(opencl_device, precision, case):
+def test_derived_packet_form_equals_scalar_function_to_the_bit(opencl_device, precision, case):
     need_precision(opencl_device, precision)
     expected, got = TWINS.results(opencl_device, precision, case.name)
-    # the inputs reach more than one result (a constant would hide a broken twin)
+    # the inputs reach more than one result (a constant would hide a wrong packet form)
     assert all(len(np.unique(column)) > 1 for column in expected.T), case.name
     assert_bits_equal(got, expected, case.name)

@@ -1,11 +1,9 @@
-"""The packet twins of the lights and the shading functions compute what the scalar ones do.
+"""The derived packet forms of the lights and the shading functions compute what the scalar ones do.
 
-glsl/lights_packet.cl and glsl/shading_packet.cl are the twins of lights.glsl and
-shading.glsl, function for function and name for name, and glsl/march_packet.cl and
-relaxed_packet.cl those of march.glsl and relaxed.glsl (checked by tests/opencl/
-test_packet_march.py). Here every lights and shading twin runs on the same inputs as its
-scalar function (tests/opencl/packet_twins.py) and must give the same bits, at both
-precisions.
+The packet program derives its functions from the one-ray program's (gpu_shader/
+vectorise.py). Here every function of lights.glsl and shading.glsl and its packet form run
+on the same inputs (tests/opencl/packet_twins.py) and must give the same bits, at both
+precisions; tests/opencl/test_packet_march.py does the same for the marches and shadows.
 
 The inputs are seeded random rows with the hard cases mixed in: light directions grazing a
 surface and behind it, view directions on and near the mirror direction (R.V and N.H at 1),
@@ -24,8 +22,8 @@ import numpy as np
 import pytest
 
 # tests/opencl, on the path as the tests' folder
-from packet_twins import (LANES, Case, TwinCases, assert_bits_equal, assert_twin_names, mix,
-                          near, need_precision, normalised, per_packet, pick, units)
+from packet_twins import LANES, Case, TwinCases, assert_bits_equal, need_precision
+from twin_inputs import mix, near, normalised, per_packet, pick, units
 
 SEED = 20240613
 BLOCKS = 96                  # packets of LANES rows; the parameters change from one to the next
@@ -34,9 +32,8 @@ PRECISIONS = ["float32", "float64"]
 MAX_DISTANCE = 50.0
 NEAR = (-7, -3)              # `near`: a relative 1e-7..1e-3 off
 
-# the scalar libraries whose packet twins (march_packet, ...) have the same functions; those
-# of march and relaxed are checked by test_packet_march.py, the others here
-LIBRARIES = ["march", "relaxed", "lights", "shading"]
+# the scalar libraries whose packet forms are checked here (those of march, relaxed and
+# shadow_pair by test_packet_march.py)
 CHECKED = ["lights", "shading"]
 
 
@@ -231,13 +228,8 @@ TWINS = TwinCases(CASES, SEED, ROWS, defines={"MAX_DISTANCE": MAX_DISTANCE}, str
 
 # --- Tests --------------------------------------------------------------------------------
 
-@pytest.mark.parametrize("library", LIBRARIES)
-def test_every_scalar_function_has_a_packet_twin_of_the_same_name_in_the_same_order(library):
-    assert_twin_names(library)
-
-
 @pytest.mark.parametrize("library", CHECKED)
-def test_every_packet_twin_is_checked_here(library):
+def test_every_function_of_the_library_is_checked_here(library):
     TWINS.assert_checks_all(library)
 
 
@@ -245,7 +237,7 @@ def test_every_packet_twin_is_checked_here(library):
 # scalar code, and the two may round differently. Measured on PoCL 3.1 (pthread, AVX-512),
 # on these inputs and on 64000 random (x, y) pairs more:
 #
-# - pow, taken 4 lanes at a time (glsl/shading_packet.cl says why): the same bits, except
+# - pow, taken 4 lanes at a time (`power` in glsl/packet.cl says why): the same bits, except
 #   where the result is subnormal (below 1.2e-38 in float32, 2.2e-308 in float64): there it
 #   may be one subnormal step off (1.4e-45, 4.9e-324): 15 and 1 of the 64000 pairs, none of
 #   the rows here;
@@ -269,10 +261,10 @@ def assert_pow_close(got, expected, what):
 
 @pytest.mark.parametrize("case", CASES, ids=CASE_IDS)
 @pytest.mark.parametrize("precision", PRECISIONS)
-def test_packet_twin_equals_scalar_function_to_the_bit(opencl_device, precision, case):
+def test_derived_packet_form_equals_scalar_function_to_the_bit(opencl_device, precision, case):
     need_precision(opencl_device, precision)
     expected, got = TWINS.results(opencl_device, precision, case.name)
-    # the inputs reach more than one result (a constant would hide a broken twin), except
+    # the inputs reach more than one result (a constant would hide a wrong packet form), except
     # where a function's result is a parameter (light_directional: only the distance)
     varied = [len(np.unique(c)) > 1 for c in expected.T]
     assert all(varied) or case.name == "light_directional", case.name
