@@ -27,7 +27,7 @@ _WORD = re.compile(r"\b\w+\b")
 
 
 @dataclass(frozen=True)
-class Function:
+class LibraryFunction:
     """One function of a library file: its name, its text (comment included), who it calls."""
     name: str
     text: str
@@ -38,7 +38,7 @@ class Function:
 class Library:
     """The functions of one building-block file, in file order, and the file's header comment."""
     header: str
-    functions: tuple[Function, ...]
+    functions: tuple[LibraryFunction, ...]
     file: str = ""                      # where it comes from, "glsl/sdf.glsl"
 
     def names(self) -> list[str]:
@@ -96,7 +96,7 @@ def load_library(name: str) -> Library:
     for name_, block in zip(names, blocks):
         body = block[block.index("{"):]
         calls = {w for w in _WORD.findall(body) if w in names and w != name_}
-        functions.append(Function(name_, block, frozenset(calls)))
+        functions.append(LibraryFunction(name_, block, frozenset(calls)))
     return Library(header, tuple(functions), f"{GLSL_DIR.name}/{path.name}")
 
 
