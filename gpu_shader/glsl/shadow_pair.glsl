@@ -1,6 +1,6 @@
 // Shadow rays toward two lights marched together, for the one-ray programs (GLSL and the
-// one-ray OpenCL kernel). glsl/march.glsl states the marching rules. The packet program has
-// no twin: its loop already steps many rays at once.
+// one-ray OpenCL kernel). glsl/march.glsl states the marching rules. The packet program is
+// derived from a one-ray program without pairs: its loop already steps many rays at once.
 
 // hard_shadow for two lights at once (a point lit by two lights): rays a and b leave the
 // same origin and are marched in one loop, a step of each per iteration, by march's rules;
