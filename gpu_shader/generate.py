@@ -288,8 +288,10 @@ class _Generator:
             return [(f"the path label ({self.file('shading')})", shading_lib.select(path)),
                     ("the heat colour map (glsl/pipeline/heat.glsl)", self.heat_code())]
         light_source, light_needs = self.light_code()
-        wanted = ["diffuse", SPECULAR[mode]] + background_needs + path
-        wanted += ["toon_band"] * (mode == "toon") + ["checker"] * self.checker
+        # Without lights a lit surface shows its ambient term only: no diffuse or specular.
+        wanted = ["diffuse", SPECULAR[mode]] * bool(self.scene.lights) + background_needs + path
+        wanted += ["toon_band"] * (mode == "toon" and bool(self.scene.lights))
+        wanted += ["checker"] * self.checker
         wanted += ["apply_fog"] * self.fog
         pairs = ([(f"shadow rays toward two lights at once ({self.file('shadow_pair')})",
                    self.d.library("shadow_pair").select(["hard_shadow_pair"]))]

@@ -331,3 +331,20 @@ class _Walk:
                 for region, _ in regions:
                     if isinstance(region, For):
                         a.diverge(region)
+
+
+def reachable(program: Program, roots) -> set:
+    """The functions of ``program`` that the ``roots`` call, directly or through others.
+
+    A one-ray program may hold a function nothing calls (a library block the scene did not
+    need after all); its packet form would be derived from no call at all, so it is left out.
+    """
+    functions = program.functions()
+    found, todo = set(), [name for name in roots if name in functions]
+    while todo:
+        name = todo.pop()
+        if name not in found:
+            found.add(name)
+            todo += [node.function for node in walk(functions[name].body)
+                     if isinstance(node, Call) and node.function in functions]
+    return found

@@ -31,7 +31,7 @@ from .packet_expressions import ALL_LANES, ExpressionLowering, literal, packet_t
 from .subset import (Assign, Binary, Blank, Block, Break, Call, Comment, Continue, Declare, Define,
                      For, Function, If, Index, Name, Node, Number, Program, Return, Unary,
                      target_root, walk)
-from .varying import Analysis
+from .varying import Analysis, reachable
 
 
 def vectorise(program: Program, structs: dict, roots: dict, live_roots=()) -> tuple:
@@ -53,8 +53,17 @@ def vectorise(program: Program, structs: dict, roots: dict, live_roots=()) -> tu
     """
     analysis = Analysis(program, structs, roots, live_roots)
     gathered = _gathered_macros(program, analysis)
-    items = []
+    called = reachable(program, roots)
+    items, comments = [], []          # a function's leading comments go where it goes
     for item in program.items:
+        if isinstance(item, Comment):
+            comments.append(item)
+            continue
+        if isinstance(item, Function) and item.name not in called:
+            comments = []             # the packet entry never reaches it: leave it out
+            continue
+        items += comments
+        comments = []
         if isinstance(item, Function):
             items.append(_FunctionLowering(analysis, item, gathered).run())
         elif isinstance(item, Define) and item.name in gathered:
@@ -63,7 +72,8 @@ def vectorise(program: Program, structs: dict, roots: dict, live_roots=()) -> tu
                                 f"{', '.join(item.parameters)}) {body}"))
         else:
             items.append(item)
-    return Program(items), analysis
+    return Program(items + comments), analysis
+
 
 
 def _gathered_macros(program: Program, analysis: Analysis) -> set:

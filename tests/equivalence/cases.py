@@ -82,6 +82,8 @@ def feature_cases() -> dict[str, Scene]:
         "normals_tetrahedron": base_scene(normal_method="tetrahedron"),
         "background_solid": base_scene(background=SolidBackground(color=(0.3, 0.3, 0.35))),
         "fog": base_scene(fog=Fog(color=(0.7, 0.75, 0.8), density=0.08)),
+        # ambient light only: the shading sum over the lights is empty
+        "no_lights": with_lights(base_scene()),
     }
     # reflections, depth 0 to 3, between a mirror sphere and a mirror box
     mirrors = [sphere(0.7, material="mirror").at(-0.6, 0.7, 0),

@@ -381,3 +381,16 @@ def test_path_labels_change_no_parameter_row(shading):
     plain = generate(scene, WIDTH, HEIGHT)
     labelled = generate(scene, WIDTH, HEIGHT, path_labels=True)
     assert np.array_equal(plain.parameters, labelled.parameters)
+
+
+@pytest.mark.parametrize("dialect", ["glsl", "opencl", "opencl-packets"])
+def test_a_lit_scene_without_lights_has_no_diffuse_or_specular_term(dialect):
+    """Without lights a surface shows its ambient term only: the shading sum has no block,
+    and no light, shadow, diffuse or specular function is emitted."""
+    scene = load_scene("classroom", ["render.shading=toon"])
+    scene = dataclasses.replace(scene, lights=())
+    source = generate(scene, WIDTH, HEIGHT, dialect=dialect).source
+    for function in ("diffuse", "specular_phong", "toon_band", "light_point", "light_visible",
+                     "hard_shadow", "hard_shadow_pair"):
+        assert not uses(source, function), function
+    assert uses(source, "shade_toon")

@@ -271,6 +271,17 @@ def test_a_construct_outside_the_subset_is_an_error_naming_it_and_its_line(sourc
         parse(source)
 
 
+def test_a_function_no_root_reaches_is_left_out_with_its_comment():
+    """Its packet form would be derived from no call: a scalar function the packet prelude
+    cannot compile (reflect of a vec3) is not written at all."""
+    program = parse("// Called by f.\nreal g(real x)\n{\n    return x * 2.0;\n}\n\n"
+                    "// Called by nobody.\nvec3 h(vec3 d, vec3 n)\n{\n    return reflect(d, n);\n}\n\n"
+                    "real f(real x)\n{\n    return g(x);\n}\n")
+    text = format_program(vectorise(program, {}, {"f": (True,)})[0])
+    assert "packet g(packet x)" in text and "// Called by f." in text
+    assert "h(" not in text and "Called by nobody" not in text
+
+
 def test_a_call_of_an_unknown_function_is_an_error_naming_it():
     program = parse("real f(real x)\n{\n    return mystery(x);\n}\n")
     with pytest.raises(SubsetError, match="unknown function 'mystery'"):
