@@ -9,7 +9,7 @@ The smooth operators are left out on purpose. Inside the blend they are not the 
 blended surface, only a bound on it, and the toolkit promises no more than that (sdf.py says
 "a bound, not an exact distance"); what they do promise -- equal to the hard operator where the
 two distances differ by at least k, and at most k / 4 away from it -- is tested in
-test_sdf_primitives.py. (Quilez's polynomial smooth minimum happens to be 1-Lipschitz as well:
+test_sdf_csg.py. (Quilez's polynomial smooth minimum happens to be 1-Lipschitz as well:
 its gradient h grad d1 + (1 - h) grad d2 is a convex combination. That is a further claim, not
 made here.)
 

@@ -1,0 +1,118 @@
+"""Reference distances for the SDF tests, derived from closest points, not from Quilez's formulas.
+
+Each function finds the nearest point of a shape from its geometry (clamping to a box, the
+nearest point of a circle or a segment, a 2-D cross-section for shapes of revolution) and
+measures the distance to it; the sign says whether the point is inside. Shared by
+tests/test_sdf_*.py (``pythonpath = ["tests"]`` in pyproject.toml makes it importable).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+EXACT = 1e-12   # float64: the formulas lose a few ulps of numbers of size ~10
+SINGLE = 1e-5   # float32: ~100 ulps of numbers of size ~10 (float32 eps is 1.2e-7)
+
+
+# --- Reference distances, from the nearest point of each shape ------------------------------------
+
+def unit(v):
+    """v : (..., k) scaled to unit length along the last axis."""
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+def box_distance(p, half):
+    """Signed distance to the box [-half, half] in any dimension; p : (N, k), half : (k,).
+
+    Outside, the nearest point of the box is p clamped into it. Inside, the nearest surface
+    point lies on the nearest face, at distance min(half - |p|).
+    """
+    nearest = np.clip(p, -half, half)
+    outside = np.linalg.norm(p - nearest, axis=-1)
+    to_nearest_face = np.min(half - np.abs(p), axis=-1)
+    is_inside = np.all(np.abs(p) <= half, axis=-1)
+    return np.where(is_inside, -to_nearest_face, outside)
+
+
+def sphere_distance(p, radius):
+    """The nearest point of the sphere is radius * p / |p|; negative inside."""
+    nearest = radius * unit(p)
+    sign = np.where(np.linalg.norm(p, axis=-1) < radius, -1.0, 1.0)
+    return sign * np.linalg.norm(p - nearest, axis=-1)
+
+
+def plane_frame(normal):
+    """An orthonormal frame (t1, t2, n) whose last vector is the unit normal; (3, 3) rows."""
+    n = unit(np.asarray(normal, dtype=np.float64))
+    # QR of a matrix whose first column is n gives two further orthonormal columns.
+    q, _ = np.linalg.qr(np.column_stack([n, np.eye(3)[:, :2]]))
+    return np.array([q[:, 1], q[:, 2], n])
+
+
+def plane_distance(p, normal, offset):
+    """Coordinate of p along the unit normal, measured from the plane's point offset * n."""
+    frame = plane_frame(normal)
+    return (p - offset * frame[2]) @ frame[2]
+
+
+def azimuth_frame(p):
+    """Distance from the y axis and the unit radial direction in the xz-plane; p : (N, 3)."""
+    rho = np.hypot(p[:, 0], p[:, 2])
+    radial = np.column_stack([p[:, 0], np.zeros(len(p)), p[:, 2]]) / rho[:, None]
+    return rho, radial
+
+
+def torus_distance(p, major, minor):
+    """Distance to the nearest point of the centre circle (radius ``major`` in the xz-plane), minus
+    the tube radius."""
+    _, radial = azimuth_frame(p)
+    nearest_on_circle = major * radial
+    return np.linalg.norm(p - nearest_on_circle, axis=-1) - minor
+
+
+def capped_cylinder_distance(p, radius, half_height):
+    """In the (rho, y) half-plane the cylinder is the rectangle [0, R] x [-h, h]; measuring to
+    [-R, R] x [-h, h] instead keeps the axis rho = 0 from counting as a boundary."""
+    rho, _ = azimuth_frame(p)
+    return box_distance(np.column_stack([rho, p[:, 1]]), np.array([radius, half_height]))
+
+
+def capsule_distance_brute_force(p, a, b, radius, samples=20001):
+    """Distance to the nearest of ``samples`` evenly spaced points of the segment a-b, minus r.
+
+    The true nearest point of the segment is within half a spacing, |b - a| / (2 (samples - 1)),
+    of a sample, so this overestimates the exact distance by at most that step, never less.
+    """
+    segment = a + np.linspace(0.0, 1.0, samples)[:, None] * (b - a)
+    nearest_squared = np.empty(len(p))
+    for start in range(0, len(p), 64):                     # (64, samples, 3) at a time
+        offsets = p[start:start + 64, None, :] - segment[None, :, :]
+        nearest_squared[start:start + 64] = np.einsum("nsk,nsk->ns", offsets, offsets).min(axis=1)
+    return np.sqrt(nearest_squared) - radius
+
+
+def capsule_sampling_step(a, b, samples=20001):
+    return np.linalg.norm(np.subtract(b, a)) / (2 * (samples - 1))
+
+
+def segment_distance_2d(p, a, b):
+    """Distance from points p : (N, 2) to the segment a-b, by clamped projection (Ericson,
+    Real-Time Collision Detection, section 5.1.2)."""
+    ab = b - a
+    t = np.clip((p - a) @ ab / (ab @ ab), 0.0, 1.0)
+    return np.linalg.norm(p - (a + t[:, None] * ab), axis=-1)
+
+
+def cone_distance(p, radius, height):
+    """In the (rho, y) half-plane the cone is the triangle (0, 0), (R, 0), (0, H).
+
+    Its boundary there is the base [(0,0), (R,0)] and the slant [(R,0), (0,H)]; the edge on the
+    axis is not a surface of the solid. Inside: above the base and below the slant line
+    rho / R + y / H = 1.
+    """
+    rho, _ = azimuth_frame(p)
+    q = np.column_stack([rho, p[:, 1]])
+    origin, rim, apex = np.array([0.0, 0.0]), np.array([radius, 0.0]), np.array([0.0, height])
+    distance = np.minimum(segment_distance_2d(q, origin, rim), segment_distance_2d(q, rim, apex))
+    is_inside = (q[:, 1] >= 0) & (q[:, 0] / radius + q[:, 1] / height <= 1)
+    return np.where(is_inside, -distance, distance)
