@@ -63,12 +63,19 @@ def default_text(f: dataclasses.Field) -> str:
     return "required"
 
 
+def allowed_text(f: dataclasses.Field) -> str:
+    """The values a field's check allows, as the check itself states them."""
+    check = f.metadata.get("check")
+    return getattr(check, "allowed", "").replace("|", "\\|")
+
+
 def table(cls) -> list[str]:
     hints = field_types(cls)
-    lines = ["| field | type | default | meaning |", "| --- | --- | --- | --- |"]
+    lines = ["| field | type | default | allowed | meaning |", "| --- | --- | --- | --- | --- |"]
     for f in dataclasses.fields(cls):
         meaning = f.metadata.get("doc", "").replace("|", "\\|")
-        lines.append(f"| `{f.name}` | {type_name(hints[f.name])} | {default_text(f)} | {meaning} |")
+        lines.append(f"| `{f.name}` | {type_name(hints[f.name])} | {default_text(f)} | "
+                     f"{allowed_text(f)} | {meaning} |")
     return lines
 
 

@@ -50,7 +50,9 @@ def round_box(x: float = 0.5, y: float | None = None, z: float | None = None,
 
 
 def plane(normal=(0.0, 1.0, 0.0), offset: float = 0.0, material: str = "default") -> Plane:
-    """The solid below the plane ``normal . x = offset`` (by default the floor y = 0)."""
+    """The solid below the plane ``n . x = offset`` with n = normal / |normal| (by default the
+    floor y = 0). The normal need not be unit length; ``offset`` is measured along n, so
+    ``plane((0, 2, 0), 1)`` is the floor y = 1, not y = 0.5."""
     return Plane(normal, offset, material=material)
 
 

@@ -52,8 +52,15 @@ def format_path(path) -> str:
     """``("objects", 2, "radius")`` -> ``"objects[2].radius"``.
 
     A key that TOML would have to quote is quoted and escaped (``materials."two\\nlines"``),
-    so the path, and the one-line message holding it, stays on one line.
+    so the path, and the one-line message holding it, stays on one line. A path longer than
+    ``LONG_PATH`` steps (only a tree nested too deep has one) keeps its first and last steps
+    around an ellipsis: ``objects[0].children[0] ... children[0].child``.
     """
+    path = tuple(path)
+    if len(path) > LONG_PATH:
+        start = len(path) - LONG_PATH // 4
+        start -= isinstance(path[start], int)          # begin the tail at a key, not an index
+        return f"{format_path(path[:LONG_PATH // 2])} ... {format_path(path[start:])}"
     text = ""
     for part in path:
         if isinstance(part, int):
@@ -62,3 +69,6 @@ def format_path(path) -> str:
             key = part if _BARE_KEY.fullmatch(part) else json.dumps(part)
             text += f".{key}" if text else key
     return text
+
+
+LONG_PATH = 16

@@ -12,6 +12,8 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+import numbers
+import re
 import types
 import typing
 from typing import Any, Callable, Literal
@@ -30,53 +32,121 @@ def param(default=dataclasses.MISSING, doc: str = "", check: Check | None = None
     """A dataclass field carrying its documentation and a value check.
 
     ``check(value)`` returns None when the value is acceptable, else a short problem such as
-    ``"must be positive"``.
+    ``"must be positive"``. The checks below (`Range`, `Rule`, `Each`) also carry
+    ``allowed``, what they accept in a few characters, which the field reference prints.
     """
     return dataclasses.field(default=default, default_factory=factory, kw_only=kw_only,
                              metadata={"doc": doc, "check": check})
 
 
 # ---------------------------------------------------------------------------------------------
+# Limits. A scene is measured in metres; these bounds keep every number a renderer derives from
+# it finite. A float32 backend squares coordinates and sizes (1e12 at most, far below float32's
+# 3.4e38), and at 1e6 m its spacing is already 6 cm, so nothing larger can be drawn faithfully.
+# docs/scene-format.md ("Limits") gives the reasons to users.
+
+MAX_COORDINATE = 1e6          # m: |x| of every position, look_at, offset, capsule end
+MIN_SIZE, MAX_SIZE = 1e-6, 1e6   # m: radii, half sizes, heights, blend widths, periods, scales
+MAX_SPEED = 1e6               # m/s and rad/s: body velocities
+MAX_DEGREES = 360.0           # rotation angles, each way
+
+
+# ---------------------------------------------------------------------------------------------
 # Checks: each returns None or a problem; `Record` adds the offending value to the message.
+# A check also says what it allows (``check.allowed``), for the field reference in the docs, so
+# the rule, its error message and its documentation are written once, here.
 
-def positive(v) -> str | None:
-    return None if v > 0 else "must be positive"
-
-
-def nonnegative(v) -> str | None:
-    return None if v >= 0 else "must be >= 0"
-
-
-def unit_interval(v) -> str | None:
-    return None if 0.0 <= v <= 1.0 else "must be between 0 and 1"
+def number_text(x) -> str:
+    """A bound as a person writes it: 1e-06 -> ``1e-6``, 1000000.0 -> ``1e6``, 0.1 -> ``0.1``."""
+    if isinstance(x, int):
+        return str(x)
+    return re.sub(r"e\+?(-?)0*(\d)", r"e\1\2", f"{x:g}")
 
 
-def color_range(v) -> str | None:
-    return None if all(0.0 <= c <= 1.0 for c in v) else "components must be between 0 and 1"
+class Rule:
+    """A check made of a test and the problem it reports: ``Rule(test, problem, allowed)``."""
+
+    def __init__(self, test: Callable[[Any], bool], problem: str, allowed: str):
+        self.test, self.problem, self.allowed = test, problem, allowed
+
+    def __call__(self, value) -> str | None:
+        return None if self.test(value) else self.problem
 
 
-def nonzero(v) -> str | None:
-    return None if any(c != 0.0 for c in v) else "must not be the zero vector"
+class Range:
+    """A number from ``lo`` to ``hi``, either end excluded with ``lo_open`` / ``hi_open``.
+
+    The message names the bound a value broke ("must be >= 1e-6", "must be <= 1e6"), except
+    that a quantity declared ``positive`` tells a value of 0 or less that it "must be
+    positive": there the sign, not the size, is the mistake.
+    """
+
+    def __init__(self, lo, hi, *, lo_open: bool = False, hi_open: bool = False,
+                 positive: bool = False, allowed: str | None = None):
+        self.lo, self.hi, self.lo_open, self.hi_open = lo, hi, lo_open, hi_open
+        self.positive = positive or (lo == 0 and lo_open)
+        self.allowed = allowed or (f"{'(' if lo_open else '['}{number_text(lo)}, "
+                                   f"{number_text(hi)}{')' if hi_open else ']'}")
+
+    def __call__(self, v) -> str | None:
+        if self.positive and v <= 0:
+            return "must be positive"
+        if v < self.lo or (self.lo_open and v == self.lo):
+            return f"must be {'>' if self.lo_open else '>='} {number_text(self.lo)}"
+        if v > self.hi or (self.hi_open and v == self.hi):
+            return f"must be {'<' if self.hi_open else '<='} {number_text(self.hi)}"
+        return None
 
 
-def all_positive(v) -> str | None:
-    return None if all(c > 0 for c in v) else "components must be positive"
+class Each:
+    """Applies a number check to every component of a vector; the error names the component
+    (``camera.position[1]``)."""
+
+    def __init__(self, check):
+        self.check = check
+        self.allowed = f"each in {check.allowed}"
+
+    def __call__(self, vector) -> None:
+        for index, component in enumerate(vector):
+            problem = self.check(component)
+            if problem:
+                raise SceneError(f"{problem} (got {show(component)})", (index,))
+        return None
 
 
-def nonnegative_vector(v) -> str | None:
-    return None if all(c >= 0 for c in v) else "components must be >= 0"
+class AllOf:
+    """The first problem any of ``checks`` finds, in order."""
+
+    def __init__(self, *checks, allowed: str | None = None):
+        self.checks = checks
+        self.allowed = allowed or ", ".join(c.allowed for c in checks)
+
+    def __call__(self, value) -> str | None:
+        for check in self.checks:
+            problem = check(value)
+            if problem:
+                return problem
+        return None
 
 
-def at_least(lo) -> Check:
-    return lambda v: None if v >= lo else f"must be >= {lo}"
+def length(v) -> float:
+    return math.hypot(*v)
 
 
-def between(lo, hi) -> Check:
-    return lambda v: None if lo <= v <= hi else f"must be between {lo} and {hi}"
-
-
-def between_open(lo, hi) -> Check:
-    return lambda v: None if lo < v < hi else f"must be strictly between {lo} and {hi}"
+# The checks many fields share. Those in upper case are named so because a field of the same
+# name (``position``) declared earlier in a class body would hide a lower-case one there.
+unit_interval = Rule(lambda v: 0.0 <= v <= 1.0, "must be between 0 and 1", "[0, 1]")
+color_range = Rule(lambda v: all(0.0 <= c <= 1.0 for c in v),
+                   "components must be between 0 and 1", "each in [0, 1]")
+SIZE = Range(MIN_SIZE, MAX_SIZE, positive=True)          # a length of a solid
+SIZES = Each(SIZE)
+COORDINATE = Range(-MAX_COORDINATE, MAX_COORDINATE)
+POINT = Each(COORDINATE)                                 # a position
+nonzero = Rule(lambda v: any(c != 0.0 for c in v), "must not be the zero vector", "not 0")
+DIRECTION = AllOf(nonzero, Rule(lambda v: MIN_SIZE <= length(v) <= MAX_SIZE,
+                                f"length must be between {number_text(MIN_SIZE)} and "
+                                f"{number_text(MAX_SIZE)}", ""),
+                  allowed=f"length in {SIZE.allowed}")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -114,23 +184,41 @@ def field_types(cls) -> dict[str, Any]:
 
 def show(value) -> str:
     """A value as a user would write it in a scene file (strings quoted and escaped)."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
     if isinstance(value, str):
         return repr(value)
     if isinstance(value, tuple):
         return "[" + ", ".join(show(v) for v in value) + "]"
+    if isinstance(value, int) and value.bit_length() > 100:
+        return f"an integer of {digit_count(value)} digits"     # str() refuses 4300 digits
     if isinstance(value, float) and value.is_integer() and abs(value) < 1e15:
         return repr(value)
-    return str(value)
+    if isinstance(value, (int, float, list, dict)):
+        return str(value)
+    return repr(value)                          # numpy and other types say what they are
+
+
+def digit_count(n: int) -> int:
+    """The number of decimal digits of ``n``, without writing it out."""
+    n = abs(n)
+    digits = int((n.bit_length() - 1) * math.log10(2)) + 1
+    return digits + 1 if n >= 10 ** digits else digits
 
 
 def _number(value, kind: type):
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
+    # numbers.Real takes NumPy's scalars too (np.float32(0.5)); bool is an int in Python but
+    # never a number in a scene file.
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise SceneError(f"must be a number (got {show(value)})")
     if kind is int:
-        if isinstance(value, float):
+        if not isinstance(value, numbers.Integral):
             raise SceneError(f"must be an integer (got {show(value)})")
         return int(value)
-    value = float(value)
+    try:
+        value = float(value)
+    except OverflowError:                       # an int beyond float's 1.8e308
+        raise SceneError(f"is too large (got {show(value)})") from None
     if not math.isfinite(value):
         raise SceneError(f"must be a finite number (got {value})")
     return value

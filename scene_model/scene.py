@@ -14,18 +14,18 @@ from typing import ClassVar, Literal
 
 from .bodies import Body, PhysicsSettings, body_sphere
 from .errors import SceneError
-from .fields import (Color, Record, Vec3, at_least, between, between_open, color_range, nonnegative,
-                     nonzero, param, positive, unit_interval)
+from .fields import (DIRECTION, POINT, SIZE, Color, Range, Record, Vec3, color_range, number_text,
+                     param, unit_interval)
 from .shapes import Node, primitives
 
 
 @dataclass(frozen=True)
 class Camera(Record):
     """A pinhole camera; the ray of each pixel is defined under "The camera" above."""
-    position: Vec3 = param((0.0, 1.0, 5.0), "Eye position.")
-    look_at: Vec3 = param((0.0, 0.0, 0.0), "Point the camera looks at.")
-    up: Vec3 = param((0.0, 1.0, 0.0), "Approximate up direction.", nonzero)
-    fov: float = param(60.0, "Vertical field of view in degrees.", between_open(0.0, 180.0))
+    position: Vec3 = param((0.0, 1.0, 5.0), "Eye position.", POINT)
+    look_at: Vec3 = param((0.0, 0.0, 0.0), "Point the camera looks at.", POINT)
+    up: Vec3 = param((0.0, 1.0, 0.0), "Approximate up direction.", DIRECTION)
+    fov: float = param(60.0, "Vertical field of view in degrees.", Range(1e-3, 179.0))
 
     def check(self):
         forward = [a - b for a, b in zip(self.look_at, self.position)]
@@ -48,7 +48,7 @@ class Checker(Record):
     color_a: Color = param((0.9, 0.9, 0.9), "Colour of the squares where floor(x/s)+floor(z/s) "
                                             "is even.", color_range)
     color_b: Color = param((0.2, 0.2, 0.2), "Colour of the other squares.", color_range)
-    scale: float = param(1.0, "Side of a square.", positive)
+    scale: float = param(1.0, "Side of a square.", SIZE)
 
 
 @dataclass(frozen=True)
@@ -59,12 +59,20 @@ class Material(Record):
     ka: float = param(0.1, "Ambient weight.", unit_interval)
     kd: float = param(0.8, "Diffuse weight.", unit_interval)
     ks: float = param(0.3, "Specular weight.", unit_interval)
-    shininess: float = param(32.0, "Specular exponent alpha.", positive)
+    shininess: float = param(32.0, "Specular exponent alpha.", Range(1.0, 10000.0))
     kr: float = param(0.0, "Mirror reflectivity: weight of the reflected colour.", unit_interval)
     checker: Checker | None = param(None, "Optional checker pattern replacing ``color``.")
 
 
 # --- Lights ----------------------------------------------------------------------------------
+
+INTENSITY = Range(0.0, 1e6)
+# With constant > 0 and linear, quadratic >= 0, the attenuation 1 / (constant + linear d +
+# quadratic d^2) is at most 1 / constant <= 1000 for every distance d >= 0: never 1 / 0.
+CONSTANT = Range(1e-3, 1e6, positive=True)
+ATTENUATION = Range(0.0, 1e6)
+SPOT_EDGE = 0.1       # degrees: the narrowest soft edge of a spot light
+
 
 class Light(Record):
     """Base of the light types; ``kind`` is the ``type`` in a scene file."""
@@ -76,24 +84,22 @@ class PointLight(Light):
     """Light from a point, fading as 1 / (constant + linear d + quadratic d^2) (LearnOpenGL,
     "Light casters")."""
     kind: ClassVar[str] = "point"
-    position: Vec3 = param((0.0, 5.0, 0.0), "Position.")
+    position: Vec3 = param((0.0, 5.0, 0.0), "Position.", POINT)
     color: Color = param((1.0, 1.0, 1.0), "Colour.", color_range)
-    intensity: float = param(1.0, "Multiplier of the colour.", nonnegative)
-    constant: float = param(1.0, "Constant attenuation term.", nonnegative)
-    linear: float = param(0.0, "Linear attenuation term.", nonnegative)
-    quadratic: float = param(0.0, "Quadratic attenuation term.", nonnegative)
-
-    def check(self):
-        _check_attenuation(self)
+    intensity: float = param(1.0, "Multiplier of the colour.", INTENSITY)
+    constant: float = param(1.0, "Constant attenuation term; more than 0, so the attenuation "
+                                 "is at most 1 / constant.", CONSTANT)
+    linear: float = param(0.0, "Linear attenuation term.", ATTENUATION)
+    quadratic: float = param(0.0, "Quadratic attenuation term.", ATTENUATION)
 
 
 @dataclass(frozen=True)
 class DirectionalLight(Light):
     """Light from infinitely far away, travelling along ``direction`` (like the sun)."""
     kind: ClassVar[str] = "directional"
-    direction: Vec3 = param((-0.4, -1.0, -0.6), "Direction the light travels in.", nonzero)
+    direction: Vec3 = param((-0.4, -1.0, -0.6), "Direction the light travels in.", DIRECTION)
     color: Color = param((1.0, 1.0, 1.0), "Colour.", color_range)
-    intensity: float = param(1.0, "Multiplier of the colour.", nonnegative)
+    intensity: float = param(1.0, "Multiplier of the colour.", INTENSITY)
 
 
 @dataclass(frozen=True)
@@ -101,28 +107,26 @@ class SpotLight(Light):
     """Point light limited to a cone with a soft edge between two angles (LearnOpenGL, "Light
     casters")."""
     kind: ClassVar[str] = "spot"
-    position: Vec3 = param((0.0, 5.0, 0.0), "Position.")
-    direction: Vec3 = param((0.0, -1.0, 0.0), "Axis of the cone, away from the light.", nonzero)
+    position: Vec3 = param((0.0, 5.0, 0.0), "Position.", POINT)
+    direction: Vec3 = param((0.0, -1.0, 0.0), "Axis of the cone, away from the light.",
+                            DIRECTION)
     color: Color = param((1.0, 1.0, 1.0), "Colour.", color_range)
-    intensity: float = param(1.0, "Multiplier of the colour.", nonnegative)
-    inner_angle: float = param(20.0, "Half-angle in degrees inside which the light is full.",
-                               between(0.0, 89.0))
+    intensity: float = param(1.0, "Multiplier of the colour.", INTENSITY)
+    inner_angle: float = param(20.0, "Half-angle in degrees inside which the light is full; "
+                                     f"at least {SPOT_EDGE} less than outer_angle.",
+                               Range(0.0, 89.0))
     outer_angle: float = param(30.0, "Half-angle in degrees outside which the light is zero.",
-                               between_open(0.0, 90.0))
-    constant: float = param(1.0, "Constant attenuation term.", nonnegative)
-    linear: float = param(0.0, "Linear attenuation term.", nonnegative)
-    quadratic: float = param(0.0, "Quadratic attenuation term.", nonnegative)
+                               Range(0.0, 90.0, lo_open=True, hi_open=True))
+    constant: float = param(1.0, "Constant attenuation term; more than 0, so the attenuation "
+                                 "is at most 1 / constant.", CONSTANT)
+    linear: float = param(0.0, "Linear attenuation term.", ATTENUATION)
+    quadratic: float = param(0.0, "Quadratic attenuation term.", ATTENUATION)
 
     def check(self):
-        if self.inner_angle >= self.outer_angle:
-            raise SceneError(f"must be less than outer_angle {self.outer_angle} "
-                             f"(got {self.inner_angle})", ("inner_angle",))
-        _check_attenuation(self)
-
-
-def _check_attenuation(light):
-    if light.constant + light.linear + light.quadratic <= 0:
-        raise SceneError("constant, linear and quadratic must not all be 0", ("constant",))
+        # The soft edge divides by cos(inner) - cos(outer); float32 must still tell them apart.
+        if self.inner_angle > self.outer_angle - SPOT_EDGE:
+            raise SceneError(f"must be less than outer_angle {self.outer_angle} by at least "
+                             f"{SPOT_EDGE} degrees (got {self.inner_angle})", ("inner_angle",))
 
 
 # --- Background, fog, render settings ----------------------------------------------------------
@@ -152,7 +156,13 @@ class SkyBackground(Background):
 class Fog(Record):
     """Exponential distance fog: colour mixed in by 1 - exp(-density t)."""
     color: Color = param((0.8, 0.85, 0.9), "Fog colour.", color_range)
-    density: float = param(0.0, "Extinction per unit distance (0: no fog).", nonnegative)
+    density: float = param(0.0, "Extinction per metre (0: no fog).", Range(0.0, 100.0))
+
+
+# A ray still marching after 100 000 steps is creeping along a surface: more steps change
+# nothing visible and only cost time. Each mirror bounce is a whole march more.
+MAX_STEPS = 100_000
+MAX_REFLECTION_DEPTH = 16
 
 
 Shading = Literal["phong", "blinn_phong", "toon", "normals", "depth", "steps"]
@@ -161,34 +171,44 @@ Shading = Literal["phong", "blinn_phong", "toon", "normals", "depth", "steps"]
 @dataclass(frozen=True)
 class RenderSettings(Record):
     """How rays are marched and shaded; every backend honours these identically."""
-    max_steps: int = param(256, "Most SDF evaluations along one ray.", at_least(1))
-    epsilon: float = param(1e-3, "A ray hits where |distance| < epsilon.", positive)
-    max_distance: float = param(100.0, "A ray misses beyond this distance.", positive)
+    max_steps: int = param(256, "Most SDF evaluations along one ray.", Range(1, MAX_STEPS))
+    epsilon: float = param(1e-3, "A ray hits where |distance| < epsilon; less than "
+                                 "max_distance.", Range(1e-9, 1.0, positive=True))
+    max_distance: float = param(100.0, "A ray misses beyond this distance.",
+                                Range(1e-3, 1e7, positive=True))
     relaxation: Literal["none", "fixed", "auto"] = param(
         "none", "Over-relaxed steps: none (Hart's plain steps), fixed (omega times the "
                 "distance, Keinert et al. 2014) or auto (omega from the field's slope along "
                 "the ray, Ban & Valasek 2023); both step back when two consecutive spheres "
                 "do not overlap.")
-    omega: float = param(1.2, "Relaxation factor of relaxation = \"fixed\".", between(1.0, 2.0))
+    omega: float = param(1.2, "Relaxation factor of relaxation = \"fixed\".", Range(1.0, 2.0))
     bounding_spheres: bool = param(False, "Leave out of each ray's march the objects whose "
                                           "bounding sphere it misses (Whitted 1980).")
     normal_method: Literal["central", "tetrahedron"] = param(
         "central", "Gradient estimate: central differences (6 evaluations) or Quilez's "
                    "tetrahedron (4).")
     normal_step: float = param(1e-3, "Finite-difference step h of the normal estimate.",
-                               positive)
+                               Range(1e-9, 1.0, positive=True))
     shadows: Literal["none", "hard", "soft"] = param("none", "Shadow rays toward each light.")
     penumbra_k: float = param(8.0, "Soft shadows: sharpness k of the penumbra (larger: harder).",
-                              positive)
+                              Range(0.1, 1000.0, positive=True))
     surface_offset: float = param(0.01, "Secondary rays start this far out along the normal.",
-                                  nonnegative)
-    reflection_depth: int = param(0, "Mirror bounces after the first hit.", between(0, 16))
+                                  Range(0.0, 1.0))
+    reflection_depth: int = param(0, "Mirror bounces after the first hit.",
+                                  Range(0, MAX_REFLECTION_DEPTH))
     shading: Shading = param("phong", "Shading mode.")
-    toon_bands: int = param(4, "Toon shading: number of brightness bands.", at_least(2))
+    toon_bands: int = param(4, "Toon shading: number of brightness bands (an 8-bit image "
+                               "shows at most 256).", Range(2, 256))
     ambient: Color = param((1.0, 1.0, 1.0), "Ambient light colour i_a.", color_range)
-    gamma: float = param(2.2, "Display gamma applied when an image is saved.", positive)
+    gamma: float = param(2.2, "Display gamma applied when an image is saved.",
+                         Range(0.1, 10.0, positive=True))
     fog: Fog = param(factory=Fog, doc="Distance fog.")
     background: Background = param(factory=SkyBackground, doc="What a miss sees.")
+
+    def check(self):
+        if self.epsilon >= self.max_distance:
+            raise SceneError(f"must be less than max_distance {number_text(self.max_distance)} "
+                             f"(got {number_text(self.epsilon)})", ("epsilon",))
 
 
 def _default_lights():

@@ -26,8 +26,9 @@ import tomlkit
 from .errors import SceneError
 from .fields import field_types
 from .files import write_atomically
+from .nesting import deep_path, parse_toml
 from .scene import Background, Light, Scene
-from .shapes import Node, Rotate, Scale, Translate, node_kinds
+from .shapes import TOO_DEEP, Node, Rotate, Scale, Translate, node_kinds
 
 # Shorthand keys on an object table, outermost first, and the transform each one stands for.
 SHORTHAND = {"position": (Translate, "offset"), "rotation": (Rotate, "degrees"),
@@ -73,8 +74,7 @@ def load_scene(name_or_path: str | os.PathLike, overrides: list[str] = ()) -> Sc
     path = scene_path(name_or_path)
     source = str(name_or_path)          # as the user wrote it: a bundled name or a path
     try:
-        with open(path, "rb") as fh:
-            data = tomllib.load(fh)
+        data = parse_toml(path.read_bytes().decode("utf-8"), tuple(SHORTHAND), source)
     except tomllib.TOMLDecodeError as err:
         raise SceneError(f"TOML syntax error: {err}", (), source) from None
     except UnicodeDecodeError as err:
@@ -92,6 +92,9 @@ def load_scene(name_or_path: str | os.PathLike, overrides: list[str] = ()) -> Sc
 
 def scene_from_dict(data: dict) -> Scene:
     """Build and validate a `Scene` from the dictionary a TOML file parses to."""
+    too_deep = deep_path(data, tuple(SHORTHAND))       # before anything below recurses
+    if too_deep is not None:
+        raise SceneError(TOO_DEEP, too_deep)
     materials = data.get("materials", {"default": None})
     return _record(Scene, data, (), frozenset(materials) if isinstance(materials, dict) else None)
 
@@ -212,7 +215,7 @@ def apply_override(data: dict, assignment: str) -> None:
         raise SceneError(f"--set {assignment!r}: expected FIELD.PATH=VALUE, "
                          "e.g. render.max_steps=64 or objects[0].radius=0.5")
     try:
-        value = tomllib.loads(f"v = {text.strip()}")["v"]
+        value = parse_toml(f"v = {text.strip()}", tuple(SHORTHAND), at=path)["v"]
     except tomllib.TOMLDecodeError:
         value = text.strip()
     target = data

@@ -8,18 +8,34 @@ names (``sdf_sphere`` in reference_cpu/sdf.py, later in GLSL and OpenCL C). Each
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import ClassVar, Iterator
 
 from .errors import SceneError
-from .fields import (Int3, Record, Vec3, all_positive, nonnegative_vector, nonzero, param, positive,
-                     show)
+from .fields import (COORDINATE, DIRECTION, MAX_DEGREES, MIN_SIZE, POINT, SIZE, SIZES, Each, Int3,
+                     Range, Record, Rule, Vec3, number_text, param, show)
+
+# The deepest tree a scene may hold: a primitive is 1 level, each operator or transform above
+# it one more. Every engine walks the tree recursively (Python allows 1000 frames, a shader
+# compiler fewer), so depth is bounded where a tree is made, not where it is walked.
+MAX_DEPTH = 64
+TOO_DEEP = f"nested deeper than the limit of {MAX_DEPTH} levels"
 
 
 class Node(Record):
     """Base of every node of the SDF tree; carries the builder's operators."""
 
     kind: ClassVar[str] = ""
+
+    def __post_init__(self):
+        super().__post_init__()
+        # A node's children were checked when they were made, so one more level is all that
+        # can go over the limit here, and the depth is known without walking the tree.
+        depth = 1 + max((node_depth(c) for c in children(self)), default=0)
+        if depth > MAX_DEPTH:
+            raise SceneError(TOO_DEEP, path_to_depth(self, MAX_DEPTH + 1))
+        object.__setattr__(self, "_depth", depth)     # not a field: equality ignores it
 
     # CSG: Python's set operators, as in fogleman/sdf.
     def __or__(self, other: Node) -> Node:
@@ -78,22 +94,22 @@ class Primitive(Node):
 class Sphere(Primitive):
     """Sphere of ``radius`` around the origin."""
     kind: ClassVar[str] = "sphere"
-    radius: float = param(1.0, "Radius.", positive)
+    radius: float = param(1.0, "Radius.", SIZE)
 
 
 @dataclass(frozen=True)
 class Box(Primitive):
     """Axis-aligned box from ``-half_size`` to ``+half_size``."""
     kind: ClassVar[str] = "box"
-    half_size: Vec3 = param((0.5, 0.5, 0.5), "Half the box's extent along x, y, z.", all_positive)
+    half_size: Vec3 = param((0.5, 0.5, 0.5), "Half the box's extent along x, y, z.", SIZES)
 
 
 @dataclass(frozen=True)
 class RoundBox(Primitive):
     """Box with edges rounded by ``radius``; its outer extent is still ``half_size``."""
     kind: ClassVar[str] = "round_box"
-    half_size: Vec3 = param((0.5, 0.5, 0.5), "Half the box's extent along x, y, z.", all_positive)
-    radius: float = param(0.1, "Radius of the rounded edges.", positive)
+    half_size: Vec3 = param((0.5, 0.5, 0.5), "Half the box's extent along x, y, z.", SIZES)
+    radius: float = param(0.1, "Radius of the rounded edges.", SIZE)
 
     def check(self):
         if self.radius > min(self.half_size):
@@ -103,53 +119,61 @@ class RoundBox(Primitive):
 
 @dataclass(frozen=True)
 class Plane(Primitive):
-    """Half-space below the plane ``normal . x = offset``; the normal points out of the solid."""
+    """Half-space below the plane ``n . x = offset``, where n = normal / |normal| (the normal
+    need not be unit length: it is normalised); n points out of the solid."""
     kind: ClassVar[str] = "plane"
-    normal: Vec3 = param((0.0, 1.0, 0.0), "Outward normal (normalised when evaluated).", nonzero)
-    offset: float = param(0.0, "Distance of the plane from the origin along the normal.")
+    normal: Vec3 = param((0.0, 1.0, 0.0), "Outward normal (normalised when evaluated).",
+                         DIRECTION)
+    offset: float = param(0.0, "Distance of the plane from the origin along the normalised "
+                               "normal.", COORDINATE)
 
 
 @dataclass(frozen=True)
 class Torus(Primitive):
     """Torus in the xz-plane: a circle of ``major_radius`` swept by a disc of ``minor_radius``."""
     kind: ClassVar[str] = "torus"
-    major_radius: float = param(1.0, "Radius of the ring's centre line.", positive)
-    minor_radius: float = param(0.25, "Radius of the tube.", positive)
+    major_radius: float = param(1.0, "Radius of the ring's centre line.", SIZE)
+    minor_radius: float = param(0.25, "Radius of the tube.", SIZE)
 
 
 @dataclass(frozen=True)
 class CappedCylinder(Primitive):
     """Solid cylinder along y, from ``-half_height`` to ``+half_height``."""
     kind: ClassVar[str] = "capped_cylinder"
-    radius: float = param(0.5, "Radius.", positive)
-    half_height: float = param(0.5, "Half the height.", positive)
+    radius: float = param(0.5, "Radius.", SIZE)
+    half_height: float = param(0.5, "Half the height.", SIZE)
 
 
 @dataclass(frozen=True)
 class Capsule(Primitive):
     """All points within ``radius`` of the segment from ``a`` to ``b``."""
     kind: ClassVar[str] = "capsule"
-    a: Vec3 = param((0.0, -0.5, 0.0), "One end of the segment.")
-    b: Vec3 = param((0.0, 0.5, 0.0), "The other end of the segment.")
-    radius: float = param(0.25, "Radius.", positive)
+    a: Vec3 = param((0.0, -0.5, 0.0), "One end of the segment.", POINT)
+    b: Vec3 = param((0.0, 0.5, 0.0), f"The other end of the segment, at least "
+                                     f"{number_text(MIN_SIZE)} from a.", POINT)
+    radius: float = param(0.25, "Radius.", SIZE)
 
     def check(self):
+        # The SDF divides by |b - a|^2.
         if self.a == self.b:
             raise SceneError("must differ from a (a capsule with a == b is a sphere)", ("b",))
+        if math.dist(self.a, self.b) < MIN_SIZE:
+            raise SceneError(f"must be at least {number_text(MIN_SIZE)} from a (got "
+                             f"{show(self.b)}, a = {show(self.a)})", ("b",))
 
 
 @dataclass(frozen=True)
 class Cone(Primitive):
     """Solid cone along y: base disc of ``radius`` at y = 0, apex at y = ``height``."""
     kind: ClassVar[str] = "cone"
-    radius: float = param(0.5, "Radius of the base.", positive)
-    height: float = param(1.0, "Height of the apex above the base.", positive)
+    radius: float = param(0.5, "Radius of the base.", SIZE)
+    height: float = param(1.0, "Height of the apex above the base.", SIZE)
 
 
 # --- CSG operators -----------------------------------------------------------------------
 
-def at_least_one(children) -> str | None:
-    return None if len(children) >= 1 else "must have at least one child"
+at_least_one = Rule(lambda children: len(children) >= 1, "must have at least one child",
+                   "at least 1")
 
 
 @dataclass(frozen=True)
@@ -180,7 +204,7 @@ class SmoothUnion(Node):
     kind: ClassVar[str] = "smooth_union"
     children: tuple[Node, ...] = param(doc="The shapes joined, left to right.",
                                        check=at_least_one)
-    k: float = param(0.25, "Width of the blend.", positive)
+    k: float = param(0.25, "Width of the blend.", SIZE)
 
 
 @dataclass(frozen=True)
@@ -189,7 +213,7 @@ class SmoothIntersection(Node):
     kind: ClassVar[str] = "smooth_intersection"
     children: tuple[Node, ...] = param(doc="The shapes intersected, left to right.",
                                        check=at_least_one)
-    k: float = param(0.25, "Width of the blend.", positive)
+    k: float = param(0.25, "Width of the blend.", SIZE)
 
 
 @dataclass(frozen=True)
@@ -198,7 +222,7 @@ class SmoothSubtraction(Node):
     kind: ClassVar[str] = "smooth_subtraction"
     children: tuple[Node, ...] = param(doc="The shape, then what is cut from it.",
                                        check=at_least_one)
-    k: float = param(0.25, "Width of the blend.", positive)
+    k: float = param(0.25, "Width of the blend.", SIZE)
 
 
 # --- Transforms ----------------------------------------------------------------------------
@@ -209,7 +233,7 @@ class Translate(Node):
     """The child moved by ``offset``."""
     kind: ClassVar[str] = "translate"
     child: Node = param(doc="The shape moved.")
-    offset: Vec3 = param((0.0, 0.0, 0.0), "Displacement.")
+    offset: Vec3 = param((0.0, 0.0, 0.0), "Displacement.", POINT)
 
 
 @dataclass(frozen=True)
@@ -217,7 +241,8 @@ class Rotate(Node):
     """The child turned by Euler angles in degrees: R = Rz(z) Ry(y) Rx(x), about x first."""
     kind: ClassVar[str] = "rotate"
     child: Node = param(doc="The shape rotated.")
-    degrees: Vec3 = param((0.0, 0.0, 0.0), "Angles about x, y and z in degrees.")
+    degrees: Vec3 = param((0.0, 0.0, 0.0), "Angles about x, y and z in degrees.",
+                          Each(Range(-MAX_DEGREES, MAX_DEGREES)))
 
 
 @dataclass(frozen=True)
@@ -225,7 +250,13 @@ class Scale(Node):
     """The child scaled uniformly by ``factor`` (the distance is multiplied back)."""
     kind: ClassVar[str] = "scale"
     child: Node = param(doc="The shape scaled.")
-    factor: float = param(1.0, "Uniform scale factor.", positive)
+    factor: float = param(1.0, "Uniform scale factor.", SIZE)
+
+
+MAX_COUNT = 100_000      # copies each way along an axis
+PERIOD = Rule(lambda v: all(c == 0 or MIN_SIZE <= c <= SIZE.hi for c in v) and any(v),
+              f"components must be 0 or in {SIZE.allowed}, not all 0",
+              f"each 0 or in {SIZE.allowed}, not all 0")
 
 
 @dataclass(frozen=True)
@@ -238,9 +269,10 @@ class Repeat(Node):
     kind: ClassVar[str] = "repeat"
     child: Node = param(doc="The shape repeated.")
     period: Vec3 = param((1.0, 1.0, 1.0), "Spacing of the copies along x, y, z (0: no repeat).",
-                         lambda v: nonnegative_vector(v) or nonzero(v))
+                         PERIOD)
     count: Int3 | None = param(None, "Copies on each side of the original along x, y, z; "
-                                     "absent for infinite repetition.", nonnegative_vector)
+                                     "absent for infinite repetition.",
+                               Each(Range(0, MAX_COUNT)))
 
 
 def children(node: Node) -> tuple[Node, ...]:
@@ -250,6 +282,26 @@ def children(node: Node) -> tuple[Node, ...]:
     if hasattr(node, "child"):
         return (node.child,)
     return ()
+
+
+def node_depth(node: Node) -> int:
+    """Levels from ``node`` down to its deepest primitive (a primitive alone: 1)."""
+    return node.__dict__["_depth"]
+
+
+def path_to_depth(node: Node, level: int) -> tuple:
+    """The path from ``node`` (level 1) down its deepest branch to the node at ``level``,
+    e.g. ``("child", "children", 0)``."""
+    path = []
+    for _ in range(level - 1):
+        if hasattr(node, "child"):
+            path.append("child")
+            node = node.child
+        else:
+            index = max(range(len(node.children)), key=lambda i: node_depth(node.children[i]))
+            path += ["children", index]
+            node = node.children[index]
+    return tuple(path)
 
 
 def primitives(nodes) -> Iterator[Primitive]:

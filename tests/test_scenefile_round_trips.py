@@ -18,6 +18,7 @@ from hypothesis import strategies as st
 from marchlab import SceneError, load_scene, save_scene
 import marchlab
 from scene_model.bodies import Body, PhysicsSettings
+from scene_model.fields import DIRECTION, Each
 from scene_model.scene import (Camera, Checker, DirectionalLight, Fog, Material, PointLight,
                                RenderSettings, Scene, SkyBackground, SolidBackground, SpotLight)
 from scene_model.shapes import (Box, CappedCylinder, Capsule, Cone, Intersection, Plane, Repeat,
@@ -76,26 +77,50 @@ def test_saved_bundled_scene_is_valid_toml_with_only_scene_keys(name, tmp_path):
 
 
 # --- Random scenes -----------------------------------------------------------------------------
-# Floats include the awkward ones on purpose: 0.1 + 0.2 (not 0.3), the tiniest normal and
-# subnormal numbers, the largest float and -0.0 (whose sign `==` cannot see).
+# Each number is drawn from the range its field declares (scene_model/fields.py), and includes
+# awkward floats on purpose where the range allows them: 0.1 + 0.2 (not 0.3), the tiniest
+# normal and subnormal numbers, the ends of the ranges and -0.0 (whose sign `==` cannot see).
 
-AWKWARD = [0.1 + 0.2, 1e-300, 5e-324, 1 / 3, 1e300, 1.7976931348623157e308, 123456789.123456789]
-REALS = st.sampled_from(AWKWARD + [-x for x in AWKWARD] + [-0.0, 0.0]) | st.floats(
-    allow_nan=False, allow_infinity=False)
-POSITIVE = st.sampled_from(AWKWARD) | st.floats(min_value=0.0, exclude_min=True,
-                                                allow_infinity=False)
-NONNEGATIVE = POSITIVE | st.sampled_from([0.0, -0.0])      # -0.0 >= 0, so it is allowed
-UNIT = st.sampled_from([0.0, -0.0, 1.0, 0.1 + 0.2, 1e-300, 5e-324]) | st.floats(0.0, 1.0)
-COLORS = st.tuples(UNIT, UNIT, UNIT)
-VECTORS = st.tuples(REALS, REALS, REALS)
-NONZERO_VECTORS = VECTORS.filter(lambda v: any(c != 0 for c in v))
-NAMES = st.text(max_size=6)                   # TOML keys may be empty, dotted, quoted, unicode
-# Material names the random trees use: keys TOML must quote, escape or keep apart.
-MATERIAL_NAMES = ["default", "", "a.b", 'say "hi"', "two words", "\u00e9t\u00e9", "tab\there"]
+AWKWARD = [0.1 + 0.2, 1e-300, 5e-324, 1 / 3, 1e-9, 1e-6, 123456.789123456789,
+           math.nextafter(1e6, 0.0), 1e6, 1e7]
+AWKWARD = AWKWARD + [-x for x in AWKWARD] + [0.0, -0.0, 1.0]
+
+
+def declared_range(cls, name):
+    """The `Range` a field's check declares (for a vector, the one each component obeys)."""
+    check = cls.__dataclass_fields__[name].metadata["check"]
+    return check.check if isinstance(check, Each) else check
+
+
+def numbers(cls, name):
+    """Floats the field ``cls.name`` allows: awkward ones, and any in its declared range."""
+    rule = declared_range(cls, name)
+    inside = [x for x in AWKWARD if rule(x) is None]
+    anywhere = st.floats(rule.lo, rule.hi, exclude_min=rule.lo_open, exclude_max=rule.hi_open)
+    return st.sampled_from(inside) | anywhere.filter(lambda x: rule(x) is None)
+
+
+def integers(cls, name):
+    rule = declared_range(cls, name)
+    return st.integers(rule.lo, rule.hi)
 
 
 def vectors_of(elements):
     return st.tuples(elements, elements, elements)
+
+
+def vectors(cls, name):
+    return vectors_of(numbers(cls, name))
+
+
+UNIT = st.sampled_from([0.0, -0.0, 1.0, 0.1 + 0.2, 1e-300, 5e-324]) | st.floats(0.0, 1.0)
+COLORS = st.tuples(UNIT, UNIT, UNIT)
+POINTS = vectors(Translate, "offset")
+SIZES = numbers(Sphere, "radius")
+DIRECTIONS = POINTS.filter(lambda v: DIRECTION(v) is None)
+NAMES = st.text(max_size=6)                   # TOML keys may be empty, dotted, quoted, unicode
+# Material names the random trees use: keys TOML must quote, escape or keep apart.
+MATERIAL_NAMES = ["default", "", "a.b", 'say "hi"', "two words", "\u00e9t\u00e9", "tab\there"]
 
 
 @st.composite
@@ -110,38 +135,39 @@ def valid(draw, cls, **fields):
 
 @st.composite
 def round_boxes(draw, material):
-    half_size = draw(vectors_of(POSITIVE))
-    radius = draw(st.floats(min_value=0.0, max_value=min(half_size), exclude_min=True))
+    half_size = draw(vectors_of(SIZES))
+    radius = draw(st.floats(min_value=1e-6, max_value=min(half_size)))
     return RoundBox(half_size, radius, material=draw(material))
 
 
 def primitive_nodes(material):
     """Every primitive kind, with random valid parameters and a material from the scene."""
     return st.one_of(
-        st.builds(Sphere, POSITIVE, material=material),
-        st.builds(Box, vectors_of(POSITIVE), material=material),
+        st.builds(Sphere, SIZES, material=material),
+        st.builds(Box, vectors_of(SIZES), material=material),
         round_boxes(material),
-        st.builds(Plane, NONZERO_VECTORS, REALS, material=material),
-        st.builds(Torus, POSITIVE, POSITIVE, material=material),
-        st.builds(CappedCylinder, POSITIVE, POSITIVE, material=material),
-        valid(Capsule, a=VECTORS, b=VECTORS, radius=POSITIVE, material=material),
-        st.builds(Cone, POSITIVE, POSITIVE, material=material),
+        st.builds(Plane, DIRECTIONS, numbers(Plane, "offset"), material=material),
+        st.builds(Torus, SIZES, SIZES, material=material),
+        st.builds(CappedCylinder, SIZES, SIZES, material=material),
+        valid(Capsule, a=POINTS, b=POINTS, radius=SIZES, material=material),
+        st.builds(Cone, SIZES, SIZES, material=material),
     )
 
 
-PERIODS = vectors_of(NONNEGATIVE).filter(lambda v: any(c != 0 for c in v))
-COUNTS = st.none() | vectors_of(st.integers(0, 2**63 - 1))
+PERIODS = vectors_of(st.just(0.0) | SIZES).filter(lambda v: any(c != 0 for c in v))
+COUNTS = st.none() | vectors_of(integers(Repeat, "count"))
+ANGLES = vectors(Rotate, "degrees")
 TRANSFORM_KINDS = ["translate", "rotate", "scale", "repeat"]
 
 
 def wrap(kind: str, node, draw):
     """``node`` inside one transform of ``kind`` with random parameters."""
     if kind == "translate":
-        return Translate(node, draw(VECTORS))
+        return Translate(node, draw(POINTS))
     if kind == "rotate":
-        return Rotate(node, draw(VECTORS))
+        return Rotate(node, draw(ANGLES))
     if kind == "scale":
-        return Scale(node, draw(POSITIVE))
+        return Scale(node, draw(SIZES))
     return Repeat(node, draw(PERIODS), draw(COUNTS))
 
 
@@ -160,57 +186,68 @@ def trees(material):
         kids = st.lists(inner, min_size=1, max_size=3).map(tuple)
         return st.one_of(
             st.builds(Union, kids), st.builds(Intersection, kids), st.builds(Subtraction, kids),
-            st.builds(SmoothUnion, kids, POSITIVE), st.builds(SmoothIntersection, kids, POSITIVE),
-            st.builds(SmoothSubtraction, kids, POSITIVE),
-            st.builds(Translate, inner, VECTORS), st.builds(Rotate, inner, VECTORS),
-            st.builds(Scale, inner, POSITIVE), st.builds(Repeat, inner, PERIODS, COUNTS),
+            st.builds(SmoothUnion, kids, SIZES), st.builds(SmoothIntersection, kids, SIZES),
+            st.builds(SmoothSubtraction, kids, SIZES),
+            st.builds(Translate, inner, POINTS), st.builds(Rotate, inner, ANGLES),
+            st.builds(Scale, inner, SIZES), st.builds(Repeat, inner, PERIODS, COUNTS),
             transform_chains(inner),
         )
     return st.recursive(primitive_nodes(material), extend, max_leaves=8)
 
 
-MATERIALS = st.builds(Material, COLORS, UNIT, UNIT, UNIT, POSITIVE, UNIT,
-                      st.none() | st.builds(Checker, COLORS, COLORS, POSITIVE))
-ATTENUATION = dict(constant=NONNEGATIVE, linear=NONNEGATIVE, quadratic=NONNEGATIVE)
+MATERIALS = st.builds(Material, COLORS, UNIT, UNIT, UNIT, numbers(Material, "shininess"), UNIT,
+                      st.none() | st.builds(Checker, COLORS, COLORS, SIZES))
+ATTENUATION = dict(constant=numbers(PointLight, "constant"),
+                   linear=numbers(PointLight, "linear"),
+                   quadratic=numbers(PointLight, "quadratic"))
+INTENSITIES = numbers(PointLight, "intensity")
 LIGHTS = st.one_of(
-    valid(PointLight, position=VECTORS, color=COLORS, intensity=NONNEGATIVE, **ATTENUATION),
-    st.builds(DirectionalLight, NONZERO_VECTORS, COLORS, NONNEGATIVE),
-    valid(SpotLight, position=VECTORS, direction=NONZERO_VECTORS, color=COLORS,
-          intensity=NONNEGATIVE, inner_angle=st.floats(0.0, 89.0),
-          outer_angle=st.floats(0.0, 90.0, exclude_min=True, exclude_max=True), **ATTENUATION),
+    st.builds(PointLight, position=POINTS, color=COLORS, intensity=INTENSITIES, **ATTENUATION),
+    st.builds(DirectionalLight, DIRECTIONS, COLORS, INTENSITIES),
+    valid(SpotLight, position=POINTS, direction=DIRECTIONS, color=COLORS,
+          intensity=INTENSITIES, inner_angle=numbers(SpotLight, "inner_angle"),
+          outer_angle=numbers(SpotLight, "outer_angle"), **ATTENUATION),
 )
 BACKGROUNDS = st.builds(SolidBackground, COLORS) | st.builds(SkyBackground, COLORS, COLORS)
-CAMERAS = valid(Camera, position=VECTORS, look_at=VECTORS, up=NONZERO_VECTORS,
-                fov=st.floats(0.0, 180.0, exclude_min=True, exclude_max=True))
-RENDER_SETTINGS = st.builds(
+CAMERAS = valid(Camera, position=POINTS, look_at=POINTS, up=DIRECTIONS,
+                fov=numbers(Camera, "fov"))
+RENDER_SETTINGS = valid(
     RenderSettings,
-    max_steps=st.integers(1, 2**63 - 1), epsilon=POSITIVE, max_distance=POSITIVE,
-    normal_method=st.sampled_from(["central", "tetrahedron"]), normal_step=POSITIVE,
-    shadows=st.sampled_from(["none", "hard", "soft"]), penumbra_k=POSITIVE,
-    surface_offset=NONNEGATIVE, reflection_depth=st.integers(0, 16),
+    max_steps=integers(RenderSettings, "max_steps"), epsilon=numbers(RenderSettings, "epsilon"),
+    max_distance=numbers(RenderSettings, "max_distance"),
+    normal_method=st.sampled_from(["central", "tetrahedron"]),
+    normal_step=numbers(RenderSettings, "normal_step"),
+    shadows=st.sampled_from(["none", "hard", "soft"]),
+    penumbra_k=numbers(RenderSettings, "penumbra_k"),
+    surface_offset=numbers(RenderSettings, "surface_offset"),
+    reflection_depth=integers(RenderSettings, "reflection_depth"),
     shading=st.sampled_from(["phong", "blinn_phong", "toon", "normals", "depth", "steps"]),
-    toon_bands=st.integers(2, 2**63 - 1), ambient=COLORS, gamma=POSITIVE,
-    fog=st.builds(Fog, COLORS, NONNEGATIVE), background=BACKGROUNDS)
+    toon_bands=integers(RenderSettings, "toon_bands"), ambient=COLORS,
+    gamma=numbers(RenderSettings, "gamma"),
+    fog=st.builds(Fog, COLORS, numbers(Fog, "density")), background=BACKGROUNDS)
 
 
 TREES = trees(st.sampled_from(MATERIAL_NAMES))
 
 PHYSICS = st.none() | st.builds(
-    PhysicsSettings, gravity=VECTORS, dt=POSITIVE,
+    PhysicsSettings, gravity=vectors(PhysicsSettings, "gravity"),
+    dt=numbers(PhysicsSettings, "dt"),
     integrator=st.sampled_from(["semi_implicit", "explicit", "verlet"]),
-    solver=st.sampled_from(["sequential", "simultaneous"]), seed=st.integers(0, 2**63 - 1),
-    restitution=UNIT, friction=NONNEGATIVE, density=POSITIVE, plane_restitution=UNIT,
-    plane_friction=NONNEGATIVE)
+    solver=st.sampled_from(["sequential", "simultaneous"]),
+    seed=integers(PhysicsSettings, "seed"), restitution=UNIT,
+    friction=numbers(PhysicsSettings, "friction"), density=numbers(PhysicsSettings, "density"),
+    plane_restitution=UNIT, plane_friction=numbers(PhysicsSettings, "plane_friction"))
 
 
 def bodies(material):
     """Bodies with mass, density or neither (never both), optional restitution and friction."""
-    weight = st.one_of(st.just({}), st.builds(lambda m: {"mass": m}, POSITIVE),
-                       st.builds(lambda d: {"density": d}, POSITIVE))
+    weight = st.one_of(st.just({}), st.builds(lambda m: {"mass": m}, numbers(Body, "mass")),
+                       st.builds(lambda d: {"density": d}, numbers(Body, "density")))
     return st.builds(lambda weight, **kwargs: Body(**weight, **kwargs), weight,
-                     position=VECTORS, velocity=VECTORS, angular_velocity=VECTORS,
-                     radius=POSITIVE, restitution=st.none() | UNIT,
-                     friction=st.none() | NONNEGATIVE, material=material)
+                     position=vectors(Body, "position"), velocity=vectors(Body, "velocity"),
+                     angular_velocity=vectors(Body, "angular_velocity"),
+                     radius=numbers(Body, "radius"), restitution=st.none() | UNIT,
+                     friction=st.none() | numbers(Body, "friction"), material=material)
 
 # Whole scenes are big: on a failure, shrink to one small example and skip the slow "explain"
 # phase, so a broken writer is reported in seconds rather than minutes.
@@ -285,7 +322,8 @@ def test_awkward_transform_chain_round_trips_exactly(node, tmp_path):
 
 def test_awkward_floats_come_back_bit_for_bit_including_the_sign_of_zero(tmp_path):
     offset = (0.1 + 0.2, 1e-300, -0.0)
-    scene = Scene(camera=Camera(position=(-0.0, 5e-324, 1.7976931348623157e308)),
+    largest = math.nextafter(1e6, 0.0)        # the largest coordinate below the limit
+    scene = Scene(camera=Camera(position=(-0.0, 5e-324, largest)),
                   objects=(Translate(Plane((0.0, 1.0, -0.0), -1e-300), offset),))
     loaded = round_trip(scene, tmp_path)
     assert loaded.objects[0].offset[0] == 0.30000000000000004
@@ -293,5 +331,5 @@ def test_awkward_floats_come_back_bit_for_bit_including_the_sign_of_zero(tmp_pat
     assert math.copysign(1.0, loaded.objects[0].offset[2]) == -1.0
     assert math.copysign(1.0, loaded.objects[0].child.normal[2]) == -1.0
     assert math.copysign(1.0, loaded.camera.position[0]) == -1.0
-    assert loaded.camera.position[1:] == (5e-324, 1.7976931348623157e308)
+    assert loaded.camera.position[1:] == (5e-324, largest)
     assert_identical(loaded, scene)
