@@ -15,6 +15,7 @@ The choice is made once per process.
 from __future__ import annotations
 
 import os
+import warnings
 from collections import OrderedDict
 from dataclasses import dataclass, field
 from typing import Callable
@@ -217,7 +218,13 @@ def _kernel(cl, dev: Device, source: str, precision: str):
         dev.programs.move_to_end(key)
         return dev.programs[key]
     try:
-        built = cl.Program(dev.context, source).build(options=build_options(cl, dev, precision))
+        # A build that succeeds may still log remarks (PoCL's "AVX vector argument ... changes
+        # the ABI", hundreds of lines); pyopencl raises them as a CompilerWarning. They say
+        # nothing a user can act on, so they are dropped: a failed build still says why.
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", cl.CompilerWarning)
+            built = cl.Program(dev.context, source).build(
+                options=build_options(cl, dev, precision))
     except Exception as err:
         raise MarchlabError(f"the generated OpenCL kernel failed to build on {dev.label}: "
                             f"{_first_line(err)} (`marchlab shader SCENE --dialect opencl "

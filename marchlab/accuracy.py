@@ -20,8 +20,8 @@ measured against:
 An error that lies, pixel by pixel, within the truth's own error (`SceneTruth`) is marked
 (`within_truth`): the truth cannot tell it from 0. `pareto` keeps the settings no other beats
 on both time and error; `recommend` names, per backend, the fastest setting whose errors stay
-within `TOLERANCES`. ``marchlab bench accuracy`` runs it and writes docs/speed-vs-error.md with
-its plots (`marchlab.accuracy_report`).
+within `TOLERANCES`. ``marchlab bench accuracy`` runs it and writes the report with its plots
+(`marchlab.accuracy_report`; ``make speed-vs-error`` writes docs/speed-vs-error.md).
 """
 
 from __future__ import annotations
@@ -36,6 +36,7 @@ from scene_model.scene import Scene, rendered_scene
 
 from .accuracy_truth import (TRUTH_RESOLUTION, SceneTruth, angle_deg, p99, scene_truth, statistic,
                              truth_method, within_truth)
+from .budget import MAX_BENCH_RAY_STEPS, check, ray_steps
 from .compare import boundary, dilate
 from .render import backend_problem, render
 
@@ -157,25 +158,30 @@ def configured(scene: Scene, change: dict) -> Scene:
     return dataclasses.replace(scene, render=dataclasses.replace(scene.render, **change))
 
 
-def gold_render(scene: Scene, width: int, height: int):
+GOLD = {"epsilon": 1e-6, "max_steps": 4096}
+
+
+def gold_render(scene: Scene, width: int, height: int, allow_large: bool = False):
     """The colour stand-in for truth: NumPy float64 with a tiny epsilon and many steps."""
-    return render(configured(scene, {"epsilon": 1e-6, "max_steps": 4096}), width, height,
-                  backend="numpy", precision="float64")
+    return render(configured(scene, GOLD), width, height, backend="numpy", precision="float64",
+                  allow_large=allow_large)
 
 
-def timed_render(scene, width, height, backend, precision, repeat):
+def timed_render(scene, width, height, backend, precision, repeat, allow_large=False):
     """(median seconds per frame, last frame); the first render (compilation) is not timed."""
-    frame = render(scene, width, height, backend=backend, precision=precision)
+    frame = render(scene, width, height, backend=backend, precision=precision,
+                   allow_large=allow_large)
     times = []
     for _ in range(repeat):
         start = time.perf_counter()
-        frame = render(scene, width, height, backend=backend, precision=precision)
+        frame = render(scene, width, height, backend=backend, precision=precision,
+                       allow_large=allow_large)
         times.append(time.perf_counter() - start)
     return float(np.median(times)), frame
 
 
 def measure(name, scene, reference: SceneTruth, gold, backend, precision, setting, change,
-            size, repeat):
+            size, repeat, allow_large=False):
     """Render one configuration and measure it against ``reference`` and ``gold``.
 
     Returns
@@ -189,7 +195,7 @@ def measure(name, scene, reference: SceneTruth, gold, backend, precision, settin
     width, height = size
     truth = reference.truth
     seconds, frame = timed_render(configured(scene, change), width, height, backend, precision,
-                                  repeat)
+                                  repeat, allow_large)
     both = frame.hit & truth.hit
     depth_error = np.abs(frame.depth[both].astype(np.float64) - truth.depth[both])
     origin, directions = camera_rays(scene.camera, width, height, np.float64)
@@ -237,27 +243,43 @@ def baseline_setting(change: dict, scene: Scene) -> str:
     return f"plain, eps {change.get('epsilon', scene.render.epsilon):g}"
 
 
+def sweep_ray_steps(scenes: dict[str, Scene], grid: dict, pairs: list, size, repeat) -> int:
+    """The work of `sweep` at worst, in ray steps (`marchlab.budget.ray_steps`): each
+    scene's gold render, and 1 + ``repeat`` renders of every configuration."""
+    total = 0
+    for scene in scenes.values():
+        total += ray_steps(configured(scene, GOLD), *size)
+        for change in grid.values():
+            total += len(pairs) * (1 + repeat) * ray_steps(configured(scene, change), *size)
+    return total
+
+
 def sweep(scenes: dict[str, Scene], size=(160, 120), repeat=3, grid=None, pairs=None,
           progress=None, truths: dict | None = None,
-          resolution: int = TRUTH_RESOLUTION) -> list[Row]:
+          resolution: int = TRUTH_RESOLUTION, allow_large: bool = False) -> list[Row]:
     """Every scene x backend/precision x setting of ``grid`` (default `settings_grid`).
 
     ``truths`` caches each scene's `SceneTruth` by name: the ones missing are built (at
     ``resolution`` for the Embree truth) and added, so one run builds each truth once.
+    The whole sweep's work (`sweep_ray_steps`) is checked against
+    `marchlab.budget.MAX_BENCH_RAY_STEPS` before it starts, unless ``allow_large``.
     """
     grid = settings_grid() if grid is None else grid
     pairs = backends_present() if pairs is None else pairs
     truths = {} if truths is None else truths
+    check(sweep_ray_steps(scenes, grid, pairs, size, repeat), MAX_BENCH_RAY_STEPS,
+          f"the sweep at {size[0]}x{size[1]}", "ray steps at worst", allow_large)
     rows = []
     for name, scene in scenes.items():
         if name not in truths:
             truths[name] = scene_truth(scene, *size, resolution=resolution)
-        gold = gold_render(scene, *size)
+        gold = gold_render(scene, *size, allow_large=True)         # within the sweep's budget
         for backend, precision in pairs:
             hits = {}
             for setting, change in grid.items():
                 row, hits[setting] = measure(name, scene, truths[name], gold, backend,
-                                             precision, setting, change, size, repeat)
+                                             precision, setting, change, size, repeat,
+                                             allow_large=True)
                 baseline = hits.get(baseline_setting(change, scene))
                 if baseline is not None:
                     row.hit_changed = int((baseline != hits[setting]).sum())

@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import importlib.util
 import io
-import os
 import tempfile
 from pathlib import Path
 
@@ -55,18 +54,26 @@ def mp4_problem() -> str | None:
     return None
 
 
+def mp4_bytes(images: list[np.ndarray], fps: float) -> bytes:
+    """An H.264 MP4 of ``images`` ((H, W, 3) uint8 each) at ``fps`` frames per second.
+
+    The encoder (ffmpeg, through imageio) writes only to files, so it writes into a
+    temporary folder that is removed afterwards, whatever happens.
+    """
+    problem = mp4_problem()
+    if problem:
+        raise MarchlabError(problem)
+    import imageio.v2 as imageio
+    with tempfile.TemporaryDirectory(prefix="marchlab-mp4-") as folder:
+        path = Path(folder) / "animation.mp4"
+        # H.264 in yuv420p needs even sides; imageio stretches an odd side by one pixel.
+        imageio.mimwrite(path, images, format="FFMPEG", fps=fps, macro_block_size=2)
+        return path.read_bytes()
+
+
 def write_mp4(path, images: list[np.ndarray], fps: float) -> None:
     """Write ``images`` as an H.264 MP4 at ``fps`` frames per second, atomically."""
     problem = mp4_problem()
     if problem:
         raise MarchlabError(f"{path}: {problem}")
-    import imageio.v2 as imageio
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp.mp4")
-    os.close(fd)
-    try:
-        # H.264 in yuv420p needs even sides; imageio stretches an odd side by one pixel.
-        imageio.mimwrite(tmp, images, format="FFMPEG", fps=fps, macro_block_size=2)
-        write_atomically(path, Path(tmp).read_bytes())
-    finally:
-        os.unlink(tmp)
+    write_atomically(path, mp4_bytes(images, fps))

@@ -4,8 +4,8 @@ compute a scene's independent ground truth.
 
 This module is the parser (`build_parser`: every command, option and default) and `main`;
 what each command does is in `marchlab.commands`. A user error (a bad file, field, size or
-option) ends with one line on stderr and exit code 2; anything else is a bug and keeps its
-traceback.
+option, a job over its budget) ends with one line on stderr and exit code 2, Ctrl-C with one
+line and exit code 130; anything else is a bug and keeps its traceback.
 """
 
 from __future__ import annotations
@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+import warnings
 
 from scene_model.camera import MAX_SIDE
 from scene_model.errors import MarchlabError
@@ -20,6 +21,7 @@ from scene_model.frame import AOVS
 
 from .commands import (cmd_bench_accuracy, cmd_compare, cmd_render, cmd_scenes, cmd_shader,
                        cmd_show, cmd_simulate, cmd_truth)
+from .doctor import add_parser as add_doctor_parser
 from .render import BACKENDS, PRECISIONS
 
 DASHED_VALUE_OPTIONS = ("--size", "--seconds", "--fps", "--resolution")
@@ -27,6 +29,8 @@ DASHED_VALUE_OPTIONS = ("--size", "--seconds", "--fps", "--resolution")
 # (tests/truth/test_truth_cli.py keeps the two equal).
 TRUTH_METHODS = ("analytic", "embree")
 MAX_RESOLUTION = 512    # a 517^3 float64 grid is already 1.1 GB
+ALLOW_LARGE_HELP = ("go ahead with a job beyond the budget (too many pixels, ray steps, frames "
+                    "or physics steps: see marchlab/budget.py), which is otherwise refused")
 
 
 class Parser(argparse.ArgumentParser):
@@ -112,6 +116,8 @@ def build_parser() -> Parser:
                    help="buffer written to a PNG (an .npz holds them all)")
     p.add_argument("--set", action="extend", nargs="+", default=[], metavar="FIELD=VALUE",
                    help="override scene fields, e.g. --set render.max_steps=64 camera.fov=40")
+    p.add_argument("--allow-large", action="store_true",
+                   help=ALLOW_LARGE_HELP)
     p.set_defaults(func=cmd_render)
 
     p = sub.add_parser("scenes", help="list the bundled scenes")
@@ -154,6 +160,8 @@ def build_parser() -> Parser:
     p.add_argument("--save", metavar="DIR",
                    help="also write both images, an amplified difference and the error mask")
     p.add_argument("--set", action="extend", nargs="+", default=[], metavar="FIELD=VALUE")
+    p.add_argument("--allow-large", action="store_true",
+                   help=ALLOW_LARGE_HELP)
     p.set_defaults(func=cmd_compare)
 
     p = sub.add_parser("simulate", help="step a scene's [[bodies]] with the physics module and "
@@ -174,6 +182,8 @@ def build_parser() -> Parser:
     p.add_argument("--set", action="extend", nargs="+", default=[], metavar="FIELD=VALUE",
                    help="override scene fields, e.g. --set physics.dt=0.001 "
                         "bodies[0].restitution=0.9")
+    p.add_argument("--allow-large", action="store_true",
+                   help=ALLOW_LARGE_HELP)
     p.set_defaults(func=cmd_simulate)
 
     p = sub.add_parser("truth", help="compute a scene's ground truth without sphere tracing "
@@ -197,8 +207,9 @@ def build_parser() -> Parser:
     q = bench.add_parser("accuracy", help="sweep epsilon, max_steps, relaxation, culling and "
                                           "normals on every backend: time against error "
                                           "(writes a Markdown report and PNG plots)")
-    q.add_argument("-o", "--output", default="docs/speed-vs-error.md",
-                   help="the report (default: docs/speed-vs-error.md)")
+    q.add_argument("-o", "--output", default="out/speed-vs-error.md",
+                   help="the report (default: out/speed-vs-error.md; `make speed-vs-error` "
+                        "regenerates the documentation's copy, docs/speed-vs-error.md)")
     q.add_argument("--images", default=None, metavar="DIR",
                    help="folder for the plots (default: images/ beside the report)")
     q.add_argument("--size", type=parse_size, default=(160, 120), metavar="WxH",
@@ -208,20 +219,67 @@ def build_parser() -> Parser:
     q.add_argument("--quick", action="store_true",
                    help="two scenes (one per kind of truth, coarse Embree grid), two settings: "
                         "check that the report can be made")
+    q.add_argument("--allow-large", action="store_true", help=ALLOW_LARGE_HELP)
     q.set_defaults(func=cmd_bench_accuracy)
+    add_doctor_parser(sub)
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(_attach_dashed_values(sys.argv[1:] if argv is None else argv))
+    """Run one command; its exit code: 0, 1 (a comparison failed a gate), 2 (a user error,
+    one line on stderr) or 130 (interrupted with Ctrl-C, one line, nothing half-written).
+
+    Warnings raised while the command runs (NumPy's "overflow encountered in multiply", a
+    library's) are not printed as they come, several lines each, but summed up in one line
+    of marchlab's own when the command succeeds (`warning_lines`).
+    """
     try:
-        return args.func(args) or 0
+        args = build_parser().parse_args(
+            _attach_dashed_values(sys.argv[1:] if argv is None else argv))
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            code = args.func(args) or 0
     except MarchlabError as err:
         print(f"marchlab: error: {err}", file=sys.stderr)
+        return 2
+    except MemoryError as err:      # past the budget with --allow-large, or a crowded machine
+        detail = " ".join(str(err).split()) or "no detail"
+        print(f"marchlab: error: out of memory ({detail}); ask for a smaller job",
+              file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("marchlab: interrupted", file=sys.stderr)
         return 130
+    for line in warning_lines(caught):
+        print(line, file=sys.stderr)
+    return code
+
+
+# Warnings meant for the people who write code, not for those who run it.
+DEVELOPER_WARNINGS = (DeprecationWarning, PendingDeprecationWarning, ImportWarning,
+                      ResourceWarning)
+
+
+def warning_lines(caught: list[warnings.WarningMessage]) -> list[str]:
+    """What a user is told of the warnings a command raised: one line for all of NumPy's
+    floating-point warnings (values out of range somewhere in the arithmetic), one line
+    for each other distinct warning, none for those meant for developers."""
+    arithmetic, others = {}, {}         # dicts as ordered sets of the distinct messages
+    for w in caught:
+        text = " ".join(str(w.message).split())
+        if issubclass(w.category, DEVELOPER_WARNINGS):
+            continue
+        if issubclass(w.category, RuntimeWarning) and " encountered in " in text:
+            arithmetic[text] = None
+        else:
+            others[text] = None
+    lines = []
+    if arithmetic:
+        lines.append("marchlab: warning: numbers went out of range in the arithmetic ("
+                     + "; ".join(arithmetic) + "): some values may be inf or NaN; "
+                     "check the magnitudes in the scene")
+    lines += [f"marchlab: warning: {text}" for text in others]
+    return lines
 
 
 if __name__ == "__main__":

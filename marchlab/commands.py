@@ -5,6 +5,11 @@ toolkit (`marchlab.render`, `marchlab.compare`, `marchlab.simulation`, the groun
 accuracy report) and writes or prints the result. A user error raises `MarchlabError`, which
 `marchlab.cli.main` turns into one line on stderr; backends are imported only when a command
 needs one.
+
+A command that writes files checks them all before it starts (`marchlab.outputs`), estimates
+its work against the budget (`marchlab.budget`, lifted by ``--allow-large``), shows a
+progress bar on a terminal while it works (`progress_bar`), and writes its files together
+at the end, so an error or Ctrl-C leaves nothing half-written.
 """
 
 from __future__ import annotations
@@ -17,13 +22,26 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from scene_model.errors import MarchlabError, SceneError
-from scene_model.files import write_atomically
+from scene_model.files import write_together
 from scene_model.scene import rendered_scene, scene_at
 from scene_model.scenefile import bundled_scene_names, load_scene, scene_to_toml
 
+from .budget import (COMMAND_LINE, MAX_BENCH_RAY_STEPS, check, check_animation, check_image,
+                     check_render)
+from .outputs import check_outputs, make_folders
 from .render import BACKENDS, backend_problem, render
 
 OUTPUT_SUFFIXES = (".png", ".npz")
+
+
+@contextmanager
+def about_options(options: str):
+    """Begin a refusal raised inside with the ``options`` it is about (``--size 10000x10000``),
+    so that its one line names what the user typed and can change."""
+    try:
+        yield
+    except MarchlabError as err:
+        raise type(err)(f"{options}: {err}") from None
 
 
 def cmd_render(args) -> int:
@@ -32,15 +50,18 @@ def cmd_render(args) -> int:
     if output.suffix.lower() not in OUTPUT_SUFFIXES:
         raise MarchlabError(f"{output}: unsupported output format {output.suffix!r} "
                             "(use .png or .npz)")
+    check_outputs(files=[output])
     scene = load_scene(args.scene, args.set)
     width, height = args.size
+    with about_options(f"--size {width}x{height}"):
+        check_render(scene, width, height, allow_large=args.allow_large, lift=COMMAND_LINE)
     start = time.perf_counter()
     with progress_bar(width * height) as progress:
         frame = render(scene, width, height, backend=args.backend, precision=args.precision,
-                       progress=progress)
+                       progress=progress, allow_large=args.allow_large)
     seconds = time.perf_counter() - start
+    make_folders(output)
     try:
-        output.parent.mkdir(parents=True, exist_ok=True)
         frame.save(output, aov=args.aov)
     except OSError as err:
         raise MarchlabError(f"{output}: cannot write: {err.strerror}") from None
@@ -92,24 +113,40 @@ def cmd_shader(args) -> int:
 
 def cmd_compare(args) -> int:
     """``marchlab compare``: two backends' frames against the gates; exit 1 if one fails."""
-    from .compare import compare_frames, failures, gates_against, write_difference_images
+    from .compare import (GATE_LEGEND, compare_frames, failures, gate_notes, gates_against,
+                          write_difference_images)
+    check_outputs(folders=[args.save])
     scene = load_scene(args.scene, args.set)
     width, height = args.size
+    with about_options(f"--size {width}x{height}"):
+        check_render(scene, width, height, frames=2, allow_large=args.allow_large,
+                     lift=COMMAND_LINE)
     b_precision = args.b_precision or BACKENDS[args.b].precisions[0]
     a_precision = args.a_precision or (
         b_precision if b_precision in BACKENDS[args.a].precisions else None)
     # Path labels tell the gates where either image may jump (marchlab.compare).
-    a = render(scene, width, height, backend=args.a, precision=a_precision, path_labels=True)
-    b = render(scene, width, height, backend=args.b, precision=b_precision, path_labels=True)
+    frames = []
+    with progress_bar(2 * width * height) as progress:
+        for backend, precision in ((args.a, a_precision), (args.b, b_precision)):
+            # One bar for both frames: the second one's pixels count on from the first's.
+            offset = len(frames) * width * height
+            frames.append(render(
+                scene, width, height, backend=backend, precision=precision, path_labels=True,
+                progress=progress and (lambda done, total: progress(offset + done, 2 * total)),
+                allow_large=args.allow_large))
+    a, b = frames
     c = compare_frames(a, b, epsilon=scene.render.epsilon)
     gates = gates_against(a.precision)
     failed = failures(c, gates)
     print(f"{args.scene}: {args.b} {b.precision} against {args.a} {a.precision}, "
           f"{width}x{height}")
     rows = c.rows()
+    notes = gate_notes(gates, c.pixels)
     name_width = max(len(name) for name, _ in rows)
+    value_width = max(len(value) for _, value in rows)
     for name, value in rows:
-        print(f"  {name:<{name_width}}  {value}")
+        print(f"  {name:<{name_width}}  {value:<{value_width}}  {notes[name]}".rstrip())
+    print(GATE_LEGEND)
     if args.save:
         for path in write_difference_images(a, b, gates, Path(args.save)):
             print(f"wrote {path}")
@@ -120,9 +157,13 @@ def cmd_compare(args) -> int:
 
 
 def cmd_simulate(args) -> int:
-    """``marchlab simulate``: step the scene's bodies, render each frame, write a GIF or MP4."""
+    """``marchlab simulate``: step the scene's bodies, render each frame, write a GIF or MP4.
+
+    Every output and the budget (frames, physics steps, the frames' memory and rendering)
+    are checked before the first step; the animation and the CSV are written together.
+    """
     from physics import PhysicsError
-    from .animation import FORMATS, gif_bytes, mp4_problem, write_mp4
+    from .animation import FORMATS, gif_bytes, mp4_bytes, mp4_problem
     from .simulation import frame_plan, physics_settings, simulate_scene
     output = Path(args.output) if args.output else Path(f"{Path(args.scene).stem}.gif")
     kind = output.suffix.lower()
@@ -131,6 +172,8 @@ def cmd_simulate(args) -> int:
                             "(use .gif or .mp4)")
     if kind == ".mp4" and mp4_problem():
         raise MarchlabError(f"{output}: {mp4_problem()}")
+    table = Path(args.csv) if args.csv else None
+    check_outputs(files=[output, table])
     scene = load_scene(args.scene, args.set)
     if not scene.bodies:
         raise MarchlabError(f"{args.scene}: has no [[bodies]] to simulate")
@@ -140,40 +183,38 @@ def cmd_simulate(args) -> int:
 
     # The step is the scene's fixed dt; the frame rate only says how often to look.
     dt = physics_settings(scene).dt
-    plan = frame_plan(dt, args.fps, args.seconds)
+    width, height = args.size
+    with about_options(f"--seconds {args.seconds:g} --fps {args.fps:g} --size {width}x{height}"):
+        plan = frame_plan(dt, args.fps, args.seconds)
+        check_animation(scene, plan.frames, plan.steps, width, height,
+                        allow_large=args.allow_large, lift=COMMAND_LINE)
     if not plan.exact:
         print(f"marchlab: note: 1/fps = {1 / args.fps:.6g} s is not a multiple of dt = "
               f"{dt:.6g} s; a frame every {plan.record_every} steps ({plan.frame_seconds:.6g} s "
               "of simulated time)", file=sys.stderr)
     start = time.perf_counter()
     try:
-        trajectory = simulate_scene(scene, plan)
+        with progress_bar(plan.steps, unit="step") as progress:
+            trajectory = simulate_scene(scene, plan, allow_large=args.allow_large,
+                                        progress=progress)
     except SceneError as err:
         raise err.in_file(args.scene) from None
     except PhysicsError as err:
         raise MarchlabError(f"{args.scene}: physics: {err}") from None
 
-    width, height = args.size
-    images = render_frames(scene, trajectory.positions, width, height, backend)
-
-    try:
-        for path in (output, Path(args.csv) if args.csv else None):
-            if path is not None:
-                path.parent.mkdir(parents=True, exist_ok=True)
-        if kind == ".gif":
-            write_atomically(output, gif_bytes(images, plan.frame_seconds))
-        else:
-            write_mp4(output, images, 1 / plan.frame_seconds)
-        if args.csv:
-            write_atomically(args.csv, trajectory_csv(trajectory))
-    except OSError as err:
-        raise MarchlabError(f"{err.filename or output}: cannot write: {err.strerror}") from None
+    images = render_frames(scene, trajectory.positions, width, height, backend,
+                           allow_large=args.allow_large)
+    payloads = {output: (gif_bytes(images, plan.frame_seconds) if kind == ".gif"
+                         else mp4_bytes(images, 1 / plan.frame_seconds))}
+    if table is not None:
+        payloads[table] = trajectory_csv(trajectory)
+    write_outputs(payloads)
     seconds = time.perf_counter() - start
     print(f"wrote {output} ({plan.frames} frames of {width}x{height} from t = 0 to "
           f"{plan.steps * dt:.6g} s, {plan.steps} steps of dt = {dt:.6g} s, {backend}, "
           f"{seconds:.2f} s)")
-    if args.csv:
-        print(f"wrote {args.csv} ({len(trajectory.times)} records of "
+    if table is not None:
+        print(f"wrote {table} ({len(trajectory.times)} records of "
               f"{trajectory.positions.shape[1]} bodies)")
     return 0
 
@@ -184,9 +225,12 @@ def cmd_truth(args) -> int:
     output = Path(args.output) if args.output else Path(f"{Path(args.scene).stem}-truth.npz")
     if output.suffix.lower() != ".npz":
         raise MarchlabError(f"{output}: unsupported output format {output.suffix!r} (use .npz)")
+    check_outputs(files=[output])
     scene = load_scene(args.scene, args.set)
-    from reference_cpu.truth import ground_truth
     width, height = args.size
+    with about_options(f"--size {width}x{height}"):
+        check_image(width, height, lift="ask for a smaller --size")
+    from reference_cpu.truth import ground_truth
     start = time.perf_counter()
     try:
         truth = ground_truth(scene, width, height, method=args.method,
@@ -196,11 +240,7 @@ def cmd_truth(args) -> int:
     seconds = time.perf_counter() - start
     buffer = io.BytesIO()
     np.savez_compressed(buffer, **truth.arrays())
-    try:
-        output.parent.mkdir(parents=True, exist_ok=True)
-        write_atomically(output, buffer.getvalue())
-    except OSError as err:
-        raise MarchlabError(f"{output}: cannot write: {err.strerror}") from None
+    write_outputs({output: buffer.getvalue()})
     print(f"wrote {output} ({width}x{height}, {args.method}: {int(truth.hit.sum())} of "
           f"{width * height} pixels hit, error bound {truth.error_bound:.3g}, measured "
           f"|sdf| max {truth.measured_error:.3g}, p99 {truth.measured_error_p99:.3g}; "
@@ -209,17 +249,30 @@ def cmd_truth(args) -> int:
 
 
 def cmd_bench_accuracy(args) -> int:
-    """``marchlab bench accuracy``: the speed-against-error report and its plots."""
-    from .accuracy_report import run
+    """``marchlab bench accuracy``: the speed-against-error report and its plots.
+
+    By default into out/ (never over the documentation's copy, which `make speed-vs-error`
+    regenerates on purpose); the report and its plots are checked before the run, which
+    takes minutes, and written together after it.
+    """
+    from .accuracy_report import plan_run, run
     output = Path(args.output)
     if output.suffix.lower() != ".md":
         raise MarchlabError(f"{output}: the report is Markdown (use a .md file)")
     images = Path(args.images) if args.images else output.parent / "images"
+    check_outputs(files=[output], folders=[images])
+    plan = plan_run(args.size, args.repeat, args.quick)
+    check(plan.ray_steps, MAX_BENCH_RAY_STEPS,
+          f"the benchmark ({plan.configurations:,} configurations x {args.repeat + 1} renders "
+          f"of {args.size[0]}x{args.size[1]})", "ray steps at worst", args.allow_large,
+          COMMAND_LINE)
     command = " ".join(["marchlab", "bench", "accuracy"] + sys.argv[3:]) if len(
         sys.argv) > 2 else "marchlab bench accuracy"
     try:
-        written = run(output, images, args.size, args.repeat, command, args.quick,
-                      echo=lambda line: print(line, file=sys.stderr, flush=True))
+        with progress_bar(plan.configurations, unit="config") as progress:
+            written = run(output, images, args.size, args.repeat, command, args.quick,
+                          echo=lambda line: print(line, file=sys.stderr, flush=True),
+                          progress=progress, allow_large=True, plan=plan)   # checked above
     except OSError as err:
         raise MarchlabError(f"{err.filename or output}: cannot write: {err.strerror}") from None
     for path in written:
@@ -227,7 +280,8 @@ def cmd_bench_accuracy(args) -> int:
     return 0
 
 
-def render_frames(scene, positions, width: int, height: int, backend: str) -> list:
+def render_frames(scene, positions, width: int, height: int, backend: str,
+                  allow_large: bool = False) -> list:
     """One 8-bit RGB image (H, W, 3) per row of ``positions`` (T, N, 3), with a progress bar.
 
     Only the bodies' positions change from frame to frame, so the GPU backend compiles its
@@ -236,11 +290,22 @@ def render_frames(scene, positions, width: int, height: int, backend: str) -> li
     images = []
     with progress_bar(len(positions), unit="frame") as progress:
         for index, centres in enumerate(positions):
-            frame = render(scene_at(scene, centres), width, height, backend=backend)
+            frame = render(scene_at(scene, centres), width, height, backend=backend,
+                           allow_large=allow_large)
             images.append(frame.image("color"))
             if progress:
                 progress(index + 1, len(positions))
     return images
+
+
+def write_outputs(payloads: dict) -> None:
+    """Write a command's files together (`scene_model.files.write_together`), making their
+    folders; a failure is a `MarchlabError` naming the user's path."""
+    make_folders(*payloads)
+    try:
+        write_together(payloads)
+    except OSError as err:
+        raise MarchlabError(f"{err.filename}: cannot write: {err.strerror}") from None
 
 
 def trajectory_csv(trajectory) -> bytes:

@@ -16,7 +16,8 @@ Colour and display also excuse pixels whose path labels differ (`Frame.path`: th
 renderers saw a different surface, checker cell or hard-shadow state along the pixel's path,
 at a reflected checker edge or a shadow edge), as long as they lie within 1 px of a jump in
 the reference's label; like coverage pixels they are counted and limited, not hidden.
-`failures` applies the gates (`Gates`) and says in one line each what failed.
+`failures` applies the gates (`Gates`) and says in one line each what failed; `gate_notes`
+labels each figure a gate (with its limit) or a trend, as ``marchlab compare`` prints them.
 """
 
 from __future__ import annotations
@@ -27,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from scene_model.files import write_atomically
+from scene_model.files import write_together
 from scene_model.frame import Frame
 from scene_model.geometry import angle_between
 
@@ -104,8 +105,31 @@ def failures(c: Comparison, gates: Gates) -> list[str]:
     return out
 
 
+GATE_LEGEND = ("gate: the comparison fails beyond the limit shown; "
+               "trend: measured to watch, never failed")
+
+
+def gate_notes(gates: Gates, pixels: int) -> dict[str, str]:
+    """Each `Comparison` field's role, for the table ``marchlab compare`` prints: a gate with
+    its limit (what `failures` checks) or a trend (measured, never failed)."""
+    share = f"{gates.coverage_fraction * pixels:.1f} ({gates.coverage_fraction:.2%} of pixels)"
+    notes = {f.name: "trend" for f in fields(Comparison)}
+    notes.update(
+        pixels="", interior="",
+        hit_differs=f"gate: <= {share}", hit_differs_far="gate: 0",
+        path_differs=f"gate: <= {share}", path_differs_far="gate: 0",
+        depth_excess=f"gate: <= {gates.depth_excess:g}",
+        normal_max_degrees=f"gate: <= {gates.normal_degrees:g}",
+        color_max=f"gate: <= {gates.color:.4g} ({gates.color * 255:.0f}/255)",
+        display_max=f"gate: <= {gates.display}")
+    return notes
+
+
 def _fmt(value) -> str:
-    return f"{value:.6g}" if isinstance(value, float) else str(value)
+    """A figure as printed; nan, a figure that could not be measured here, is ``n/a``."""
+    if isinstance(value, float):
+        return "n/a" if np.isnan(value) else f"{value:.6g}"
+    return str(value)
 
 
 def compare_frames(a: Frame, b: Frame, erode: int = 2, epsilon: float | None = None) -> Comparison:
@@ -155,14 +179,18 @@ def compare_frames(a: Frame, b: Frame, erode: int = 2, epsilon: float | None = N
 
 
 def _ssim(a: np.ndarray, b: np.ndarray) -> float:
-    """Structural similarity of two colour images in [0, 1] (nan if it cannot be computed)."""
+    """Structural similarity of two colour images in [0, 1] (nan if it cannot be computed:
+    without scikit-image, or under 3 pixels a side).
+
+    The window is Wang et al.'s 7x7, or the largest odd one that fits a smaller image."""
     try:
         from skimage.metrics import structural_similarity
     except ImportError:
         return float("nan")
-    if min(a.shape[:2]) < 7:                    # smaller than its 7x7 window
+    window = min(7, min(a.shape[:2]) - (1 - min(a.shape[:2]) % 2))
+    if window < 3:
         return float("nan")
-    return float(structural_similarity(a, b, channel_axis=-1, data_range=1.0))
+    return float(structural_similarity(a, b, channel_axis=-1, data_range=1.0, win_size=window))
 
 
 def _max(values: np.ndarray) -> float:
@@ -235,10 +263,10 @@ def write_difference_images(a: Frame, b: Frame, gates: Gates, directory) -> list
         "difference-x16.png": np.floor(diff * 255 + 0.5).astype(np.uint8),
         "error-mask.png": np.repeat(error_mask(a, b, gates)[..., None] * np.uint8(255), 3, axis=-1),
     }
-    paths = []
+    payloads = {}
     for name, pixels in images.items():
         buffer = io.BytesIO()
         Image.fromarray(pixels).save(buffer, format="PNG")
-        write_atomically(directory / name, buffer.getvalue())
-        paths.append(directory / name)
-    return paths
+        payloads[directory / name] = buffer.getvalue()
+    write_together(payloads)             # all four, or none
+    return list(payloads)

@@ -16,6 +16,8 @@ from scene_model.errors import MarchlabError
 from scene_model.frame import Frame
 from scene_model.scene import Scene, rendered_scene
 
+from .budget import check_render
+
 
 @dataclass(frozen=True)
 class Backend:
@@ -44,7 +46,7 @@ PRECISIONS = ("float32", "float64")
 def render(scene: Scene, width: int, height: int, backend: str = "numpy",
            precision: str | None = None,
            progress: Callable[[int, int], None] | None = None,
-           path_labels: bool = False) -> Frame:
+           path_labels: bool = False, allow_large: bool = False) -> Frame:
     """Render ``scene`` to a `Frame` of ``width`` x ``height`` pixels.
 
     Parameters
@@ -64,6 +66,15 @@ def render(scene: Scene, width: int, height: int, backend: str = "numpy",
         Also compute each pixel's path label (`scene_model.frame.Frame.path`), which tells
         two renderers' frames apart only where the image may jump (`marchlab.compare`).
         Off by default: it is bookkeeping for the equivalence suite, not rendering.
+    allow_large : bool
+        Go ahead with an image or an amount of work beyond the budget (`marchlab.budget`:
+        more than `scene_model.camera.MAX_PIXELS` pixels, or more than
+        `marchlab.budget.MAX_RAY_STEPS` ray steps at worst), which is otherwise refused.
+
+    Raises
+    ------
+    MarchlabError
+        An unknown backend or precision, a bad size, a job over the budget (`BudgetError`).
     """
     if backend not in BACKENDS:
         raise MarchlabError(f"unknown backend {backend!r} (available: {', '.join(BACKENDS)})")
@@ -74,10 +85,11 @@ def render(scene: Scene, width: int, height: int, backend: str = "numpy",
         raise MarchlabError(f"the {backend} backend renders in "
                             f"{' or '.join(BACKENDS[backend].precisions)} only "
                             f"(asked for {precision})")
-    check_image_size(width, height)
+    check_image_size(width, height, allow_large)
     if not isinstance(scene, Scene):
         raise MarchlabError(f"scene must be a marchlab.Scene (got {type(scene).__name__}); "
                             "use marchlab.load_scene(name_or_path)")
+    check_render(scene, width, height, allow_large=allow_large)
     module = importlib.import_module(BACKENDS[backend].module)
     # Backends draw objects only: the bodies become spheres after the scene's objects.
     return module.render(rendered_scene(scene), width, height, precision=precision,

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
@@ -25,6 +26,10 @@ from scene_model.bodies import PhysicsSettings
 from scene_model.errors import MarchlabError, SceneError
 from scene_model.scene import Scene
 from scene_model.shapes import Plane, Translate
+
+from .budget import check_physics
+
+PROGRESS_STEPS = 64        # physics steps between two progress reports
 
 
 def _cpu_stepper(world: physics.World):
@@ -156,33 +161,77 @@ class FramePlan:
 
 
 def frame_plan(dt: float, fps: float, seconds: float) -> FramePlan:
-    """Plan ``seconds`` of animation at ``fps`` frames per second from steps of ``dt``."""
-    for name, value in (("fps", fps), ("seconds", seconds)):
+    """Plan ``seconds`` of animation at ``fps`` frames per second from steps of ``dt``.
+
+    The plan is only counted, not checked against a budget (`marchlab.budget`): a plan of a
+    billion frames is a plan, `simulate_scene` refuses to carry it out.
+
+    Raises
+    ------
+    MarchlabError
+        A number that is not positive and finite, less than one frame, or more frames or
+        steps between frames than a float can count.
+    """
+    for name, value in (("fps", fps), ("seconds", seconds), ("dt", dt)):
         if not (math.isfinite(value) and value > 0):
             raise MarchlabError(f"{name} must be a positive number (got {value!r})")
+    if not math.isfinite(seconds * fps):
+        raise MarchlabError(f"{seconds!r} s at {fps!r} frames per second is more frames than "
+                            "can be counted")
     frames = round(seconds * fps)
     if frames < 1:
         raise MarchlabError(f"{seconds!r} s at {fps!r} frames per second is less than one "
                             "frame")
-    record_every = max(1, round(1 / (fps * dt)))
+    steps_per_frame = 1 / (fps * dt) if fps * dt > 0 else math.inf
+    if not math.isfinite(steps_per_frame):
+        raise MarchlabError(f"1/fps = {1 / fps:.6g} s is more steps of dt = {dt:.6g} s than "
+                            "can be counted")
+    record_every = max(1, round(steps_per_frame))
     exact = math.isclose(record_every * dt, 1 / fps, rel_tol=1e-9)
     return FramePlan(record_every, frames, record_every * dt, exact)
 
 
-def simulate_scene(scene: Scene, plan: FramePlan, dtype=np.float64) -> physics.Trajectory:
+def simulate_scene(scene: Scene, plan: FramePlan, dtype=np.float64, *,
+                   allow_large: bool = False,
+                   progress: Callable[[int, int], None] | None = None) -> physics.Trajectory:
     """Step the scene's world and record one state per frame of ``plan`` (frames records).
+
+    Parameters
+    ----------
+    scene : Scene
+    plan : FramePlan
+        From `frame_plan`.
+    dtype : {numpy.float64, numpy.float32}
+    allow_large : bool
+        Go ahead beyond `marchlab.budget.MAX_BODY_STEPS` (steps x bodies), otherwise refused.
+    progress : callable, optional
+        Called as ``progress(steps done, plan.steps)`` every `PROGRESS_STEPS` steps.
 
     Raises
     ------
     SceneError
         From `build_world`.
+    BudgetError
+        A plan of more steps x bodies than the budget, unless ``allow_large``.
     MarchlabError
         If the state stops being finite (values so large that the arithmetic overflows).
     """
+    check_physics(plan.steps, len(scene.bodies), allow_large)
     world = build_world(scene, dtype)
+    done = 0
+
+    def step(n: int) -> None:
+        # The same steps as world.step(n), in slices short enough to show progress.
+        nonlocal done
+        for start in range(0, n, PROGRESS_STEPS):
+            world.step(min(PROGRESS_STEPS, n - start))
+            done += min(PROGRESS_STEPS, n - start)
+            if progress is not None:
+                progress(done, plan.steps)
+
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):   # checked below
         trajectory = physics.simulate(world, plan.steps * world.dt,
-                                      record_every=plan.record_every)
+                                      record_every=plan.record_every, step=step)
     finite = np.all(np.isfinite(trajectory.positions), axis=(1, 2))
     if not finite.all():
         time = trajectory.times[np.argmin(finite)]

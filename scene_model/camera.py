@@ -26,12 +26,35 @@ from .scene import Camera
 
 MAX_SIDE = 16384      # the usual largest GPU texture; far beyond what a lesson needs
 
+# The memory an image may take. A NumPy render holds the Frame's buffers (57 bytes a pixel in
+# float64: colour 12, depth 8, normal 24, steps, object id and path label 4 each, hit 1) and
+# the primary rays' directions while it runs: about 85 bytes a pixel measured at 2000x2000,
+# 100 with the 8-bit picture made when it is saved. 4 GiB of that is 42,949,672 pixels, so
+# 8K UHD (7680x4320) fits and 10000x10000 does not.
+MAX_IMAGE_BYTES = 4 * 2**30
+BYTES_PER_PIXEL = 100
+MAX_PIXELS = MAX_IMAGE_BYTES // BYTES_PER_PIXEL
 
-def check_image_size(width, height) -> None:
-    """Raise `MarchlabError` unless ``width`` and ``height`` are integers from 1 to MAX_SIDE."""
+
+def check_image_size(width, height, allow_large: bool = False) -> None:
+    """Raise `MarchlabError` unless ``width`` and ``height`` are integers from 1 to MAX_SIDE
+    and, unless ``allow_large``, the image has at most MAX_PIXELS pixels."""
     for name, value in (("width", width), ("height", height)):
         if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= MAX_SIDE:
             raise MarchlabError(f"{name} must be an integer from 1 to {MAX_SIDE} (got {value!r})")
+    problem = image_size_problem(width, height)
+    if problem and not allow_large:
+        raise MarchlabError(f"{problem}; pass allow_large=True to go ahead")
+
+
+def image_size_problem(width: int, height: int) -> str | None:
+    """None if a ``width`` x ``height`` image fits in MAX_PIXELS, else one line saying so
+    (without saying how to lift the limit: that depends on who asks)."""
+    if width * height <= MAX_PIXELS:
+        return None
+    return (f"{width}x{height} is {width * height:,} pixels, more than the limit of "
+            f"{MAX_PIXELS:,} (its buffers would take about "
+            f"{BYTES_PER_PIXEL * width * height / 2**30:.0f} GiB)")
 
 
 def camera_basis(camera: Camera) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -109,3 +109,34 @@ def test_written_files_get_ordinary_permissions_or_keep_the_old_ones(tmp_path):
         assert kept.stat().st_mode & 0o777 == 0o640 and kept.read_bytes() == b"new"
     finally:
         os.umask(umask)
+
+
+def test_write_together_touches_no_target_when_one_temporary_fails(tmp_path):
+    """The second file cannot be written (its folder is missing): the first keeps its old
+    contents, and no temporary file is left."""
+    from scene_model.files import write_together
+    first = tmp_path / "first.gif"
+    first.write_bytes(b"old")
+    second = tmp_path / "missing-folder" / "second.csv"
+    with pytest.raises(FileNotFoundError) as caught:
+        write_together({first: b"new", second: b"rows"})
+    assert caught.value.filename == str(second)            # the user's path, not a temporary
+    assert first.read_bytes() == b"old"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["first.gif"]
+
+
+def test_write_together_refuses_a_folder_as_a_target_before_renaming_anything(tmp_path):
+    from scene_model.files import write_together
+    (tmp_path / "DIR").mkdir()
+    with pytest.raises(IsADirectoryError) as caught:
+        write_together({tmp_path / "ok.gif": b"gif", tmp_path / "DIR": b"csv"})
+    assert caught.value.filename == str(tmp_path / "DIR")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["DIR"]
+
+
+def test_write_together_writes_every_file_whole(tmp_path):
+    from scene_model.files import write_together
+    payloads = {tmp_path / f"{name}.bin": name.encode() * 1000 for name in ("a", "b", "c")}
+    write_together(payloads)
+    assert {p: p.read_bytes() for p in payloads} == payloads
+    assert leftovers(tmp_path) == []

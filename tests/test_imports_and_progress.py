@@ -58,3 +58,59 @@ def test_progress_bar_is_drawn_on_a_terminal_once_a_render_takes_over_a_second(m
 def test_no_progress_bar_for_a_quick_render_or_when_stderr_is_not_a_terminal(monkeypatch):
     assert run_progress(monkeypatch, tty=True, seconds=0.2) == ""
     assert run_progress(monkeypatch, tty=False, seconds=1.3) == ""
+
+
+class RecordingBars:
+    """Stands in for `marchlab.commands.progress_bar`: records each bar's unit and total and
+    every report, so a test sees which phases of a command show progress (without timing)."""
+
+    def __init__(self):
+        self.bars = []
+
+    def __call__(self, total, unit="px"):
+        from contextlib import contextmanager
+
+        @contextmanager
+        def bar():
+            reports = []
+            self.bars.append((unit, total, reports))
+            yield lambda done, _total: reports.append(done)
+        return bar()
+
+
+def test_simulate_shows_progress_while_stepping_and_while_rendering_frames(tmp_path, capsys,
+                                                                          monkeypatch):
+    from cli_helpers import run_cli
+    bars = RecordingBars()
+    monkeypatch.setattr("marchlab.commands.progress_bar", bars)
+    code, _, err = run_cli(capsys, "simulate", "bounce", "--seconds", "0.5", "--fps", "10",
+                           "--size", "16x12", "--backend", "numpy", "-o", tmp_path / "x.gif")
+    assert code == 0, err
+    units = [(unit, total) for unit, total, _ in bars.bars]
+    assert units == [("step", 96), ("frame", 5)]               # 4 frame periods of 24 steps
+    steps, frames = (reports for _, _, reports in bars.bars)
+    assert steps == sorted(steps) and steps[-1] == 96
+    assert frames == [1, 2, 3, 4, 5]
+
+
+def test_bench_accuracy_shows_progress_per_configuration(tmp_path, capsys, monkeypatch):
+    from cli_helpers import run_cli
+    bars = RecordingBars()
+    monkeypatch.setattr("marchlab.commands.progress_bar", bars)
+    code, _, err = run_cli(capsys, "bench", "accuracy", "--quick", "--size", "8x6",
+                           "--repeat", "1", "-o", tmp_path / "r.md")
+    assert code == 0, err
+    ((unit, total, reports),) = bars.bars
+    assert unit == "config" and reports == list(range(1, total + 1))
+    assert "[1/" not in err                    # no line per configuration: the bar shows them
+
+
+def test_compare_shows_one_bar_over_both_frames(capsys, monkeypatch):
+    from cli_helpers import run_cli
+    bars = RecordingBars()
+    monkeypatch.setattr("marchlab.commands.progress_bar", bars)
+    code, _, _ = run_cli(capsys, "compare", "classroom", "--a", "numpy", "--b", "numpy",
+                         "--size", "8x6")
+    assert code == 0
+    ((unit, total, reports),) = bars.bars
+    assert (unit, total) == ("px", 96) and reports[-1] == 96 and reports == sorted(reports)
