@@ -242,8 +242,12 @@ def build_options(cl, dev: Device, precision: str) -> list[str]:
     In float32, unsuffixed literals (``0.5``) are single precision, as in GLSL, and divisions
     and square roots are correctly rounded where the device can (OpenCL allows them 2.5-3
     ulp otherwise; NumPy rounds them correctly).
+
+    ``-w`` (OpenCL 1.2, section 5.8.4.4) silences the compiler's warnings: PoCL's clang would
+    otherwise print "186 warnings generated." straight to the terminal for remarks about its
+    own vector ABI, which no user can act on. Errors are still reported.
     """
-    options = []
+    options = ["-w"]
     if precision == "float32":
         options.append("-cl-single-precision-constant")
         rounded = cl.device_fp_config.CORRECTLY_ROUNDED_DIVIDE_SQRT

@@ -16,7 +16,7 @@ from scene_model.geometry import rotation_matrix
 from scene_model.shapes import (Box, CappedCylinder, Capsule, Cone, Intersection, Node, Plane,
                                 Repeat, Rotate, RoundBox, Scale, SmoothIntersection,
                                 SmoothSubtraction, SmoothUnion, Sphere, Subtraction, Torus,
-                                Translate, Union)
+                                Translate, Union, scene_union)
 
 from .parameters import ParameterBlock
 
@@ -43,7 +43,7 @@ def scene_root(objects) -> Node | None:
     """The tree the scene's objects form: one object, or the union of all of them."""
     if not objects:
         return None
-    return objects[0] if len(objects) == 1 else Union(tuple(objects))
+    return objects[0] if len(objects) == 1 else scene_union(tuple(objects))
 
 
 def primitive_parameters(node: Node) -> tuple[list, list[str]]:

@@ -256,16 +256,19 @@ def cmd_bench_accuracy(args) -> int:
     takes minutes, and written together after it.
     """
     from .accuracy_report import plan_run, run
+    for option, value in (("--output", args.output), ("--images", args.images)):
+        if value is not None and not value.strip():
+            raise MarchlabError(f"{option}: an empty path (name a file or a folder)")
     output = Path(args.output)
     if output.suffix.lower() != ".md":
         raise MarchlabError(f"{output}: the report is Markdown (use a .md file)")
     images = Path(args.images) if args.images else output.parent / "images"
     check_outputs(files=[output], folders=[images])
     plan = plan_run(args.size, args.repeat, args.quick)
-    check(plan.ray_steps, MAX_BENCH_RAY_STEPS,
-          f"the benchmark ({plan.configurations:,} configurations x {args.repeat + 1} renders "
-          f"of {args.size[0]}x{args.size[1]})", "ray steps at worst", args.allow_large,
-          COMMAND_LINE)
+    with about_options(f"--size {args.size[0]}x{args.size[1]} --repeat {args.repeat}"):
+        check(plan.ray_steps, MAX_BENCH_RAY_STEPS,
+              f"the benchmark ({plan.configurations:,} configurations x {args.repeat + 1} "
+              f"renders)", "ray steps at worst", args.allow_large, COMMAND_LINE)
     command = " ".join(["marchlab", "bench", "accuracy"] + sys.argv[3:]) if len(
         sys.argv) > 2 else "marchlab bench accuracy"
     try:

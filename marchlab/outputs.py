@@ -31,14 +31,22 @@ def check_outputs(files=(), folders=()) -> None:
         if key in seen:
             raise MarchlabError(f"{path}: named twice as an output")
         seen[key] = kind
-        if kind == "file":
-            if path.is_dir():
-                raise MarchlabError(f"{path}: is a folder (give a file name)")
-            _check_folder(path, path.parent)
-        else:
-            if path.exists() and not path.is_dir():
-                raise MarchlabError(f"{path}: is a file, not a folder")
-            _check_folder(path, path)
+        try:
+            _check_output(path, kind)
+        except OSError as err:      # a name the system refuses (too long, ...)
+            raise MarchlabError(f"{path}: cannot write there: {err.strerror}") from None
+
+
+def _check_output(path: Path, kind: str) -> None:
+    """Raise `MarchlabError` unless ``path`` can be written as a ``kind`` ("file"/"folder")."""
+    if kind == "file":
+        if path.is_dir():
+            raise MarchlabError(f"{path}: is a folder (give a file name)")
+        _check_folder(path, path.parent)
+    else:
+        if path.exists() and not path.is_dir():
+            raise MarchlabError(f"{path}: is a file, not a folder")
+        _check_folder(path, path)
 
 
 def _check_folder(path: Path, folder: Path) -> None:

@@ -53,12 +53,16 @@ def bundled_scene_names() -> list[str]:
 def scene_path(name_or_path: str | os.PathLike) -> Path:
     """The file of a bundled scene's name, or the path itself if it names a file."""
     path = Path(name_or_path)
-    if path.is_file():
-        return path
-    if path.is_dir():
-        raise SceneError("is a folder, not a scene file", (), str(name_or_path))
-    bundled = resources.files("scene_model") / "scenes" / f"{name_or_path}.toml"
-    if path.suffix == "" and bundled.is_file():
+    try:
+        if path.is_file():
+            return path
+        if path.is_dir():
+            raise SceneError("is a folder, not a scene file", (), str(name_or_path))
+        bundled = resources.files("scene_model") / "scenes" / f"{name_or_path}.toml"
+        found = path.suffix == "" and bundled.is_file()
+    except OSError as err:          # a name the system refuses to look up (too long, ...)
+        raise SceneError(f"cannot look it up: {err.strerror}", (), str(name_or_path)) from None
+    if found:
         return Path(str(bundled))
     names = ", ".join(bundled_scene_names())
     raise SceneError(f"no such file or bundled scene (bundled: {names})", (),

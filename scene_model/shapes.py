@@ -284,6 +284,19 @@ def children(node: Node) -> tuple[Node, ...]:
     return ()
 
 
+def scene_union(objects: tuple[Node, ...]) -> Union:
+    """The union joining a scene's objects, as the generated shaders draw them.
+
+    It is the scene's list made a node, not a level anyone nested, so it may stand one level
+    above `MAX_DEPTH` (a scene of one object 64 deep and the bodies' spheres): it is built
+    without the depth check of `Node`, from children that each passed it.
+    """
+    root = object.__new__(Union)
+    object.__setattr__(root, "children", tuple(objects))
+    object.__setattr__(root, "_depth", 1 + max(node_depth(child) for child in objects))
+    return root
+
+
 def node_depth(node: Node) -> int:
     """Levels from ``node`` down to its deepest primitive (a primitive alone: 1)."""
     return node.__dict__["_depth"]

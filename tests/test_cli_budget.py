@@ -162,7 +162,8 @@ def test_bench_accuracy_over_the_budget_is_refused_before_it_starts(tmp_path, ca
     code, _, err = run_cli(capsys, "bench", "accuracy", "--size", "1280x960", "--repeat", "9",
                            "-o", tmp_path / "r.md")
     assert_one_line_error(code, err)
-    assert re.search(r"the benchmark \([\d,]+ configurations x 10 renders of 1280x960\): "
+    assert re.search(r"--size 1280x960 --repeat 9: the benchmark \([\d,]+ configurations x "
+                     r"10 renders\): "
                      r"[\d.e+]+ ray steps at worst is more than the limit of 1.00e\+12; "
                      r"add --allow-large to go ahead", err), err
     assert list(tmp_path.iterdir()) == []

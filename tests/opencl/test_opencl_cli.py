@@ -106,3 +106,16 @@ def test_device_variable_matching_nothing_is_one_line_exit_2_listing_devices(
     for index, label, _ in opencl.candidates(cl):
         assert f"{index} {label}" in result.stderr
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_kernel_built_afresh_prints_nothing_of_the_compiler_to_the_terminal(
+        opencl_device, monkeypatch, tmp_path):
+    # PoCL's clang writes "186 warnings generated." straight to file descriptor 2, past any
+    # Python warning filter; the build's -w must keep it quiet. Both caches are off, so the
+    # kernel really is compiled in this subprocess.
+    monkeypatch.setenv("PYOPENCL_NO_CACHE", "1")
+    monkeypatch.setenv("POCL_KERNEL_CACHE", "0")
+    result = run_marchlab("render", "lights", "--backend", "opencl", "--size", "8x6",
+                          "-o", tmp_path / "x.png", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert result.stderr == ""
