@@ -1,6 +1,6 @@
 """Steps per second of the physics world for 100, 1,000 and 10,000 spheres in a box.
 
-    python benchmarks/bench_physics.py [--counts 100 1000 10000] [--seconds 0.25]
+    python benchmarks/bench_physics.py [--counts 100 1000 10000] [--seconds 0.25] [--worst]
 
 Spheres (radius 5 cm) start on a jittered lattice in a box (floor and four walls) sized so the
 crowding is the same at every count, with random velocities, and fall and collide. After a
@@ -10,6 +10,13 @@ perfectly linear, 100 would be quadratic from 100 to 10,000 spheres. Machines ar
 noisy: compare ratios from one run, not absolute times across runs. The lattice starts just
 above the floor, so by the end of the warm-up the spheres are settling into a pile with
 thousands of contacts.
+
+``--worst`` adds the worst cases for the broad phase and the push-out: 1,000 and 10,000 spheres
+(``--worst-counts``) spawned at one point 1 m above the floor, and as many spawned overlapping,
+uniformly in a ball of 3 radii per 1,000 spheres (about 60 spheres in every place where one
+would fit). The first ``--worst-steps`` steps are timed from the spawn, when the crowd is densest;
+"pairs examined" is the broad phase's candidate count summed over those steps (both of its uses
+in a step: contacts and the swept test), "extent" the size of the crowd afterwards.
 
 ``--gpu`` adds rows for gpu_shader.physics (the same scene in float32, simultaneous solver,
 brute-force O(N^2) contacts; the default counts there are 100 and 1,000), timed with a
@@ -53,6 +60,33 @@ def box_of_spheres(count: int, solver: str, seed: int = 0) -> physics.World:
     return world
 
 
+def spawned_crowd(count: int, spawn: str, solver: str, seed: int = 0) -> physics.World:
+    """``count`` spheres of RADIUS above a floor, all at one point or overlapping in a ball."""
+    world = physics.World(solver=solver, seed=seed)
+    world.add_plane((0, 1, 0), 0)
+    centre = np.zeros((count, 3)) + (0, 1, 0)
+    if spawn == "overlapping":
+        rng = np.random.default_rng(seed)
+        direction = rng.normal(size=(count, 3))
+        direction /= np.linalg.norm(direction, axis=1)[:, None]
+        ball = 3 * RADIUS * (count / 1000) ** (1 / 3)
+        centre += direction * ball * rng.uniform(0, 1, (count, 1)) ** (1 / 3)
+    world.add_spheres(centre, radius=RADIUS)
+    return world
+
+
+def time_crowd(world: physics.World, steps: int) -> tuple[float, float, int]:
+    """(ms of the first step, mean ms per step, pairs examined or -1) over ``steps`` steps."""
+    walls, examined = [], 0
+    for _ in range(steps):
+        start = time.perf_counter()
+        world.step(1)
+        walls.append(time.perf_counter() - start)
+        work = getattr(world, "work", None)                 # the last step's counts
+        examined = examined + work["pairs examined"] if work is not None else -1
+    return 1e3 * walls[0], 1e3 * float(np.mean(walls)), examined
+
+
 def time_steps(world: physics.World, seconds: float) -> tuple[int, float]:
     """(steps taken, wall seconds) for ``seconds`` of simulated time, after a 0.25 s warm-up."""
     world.step(int(round(0.25 / world.dt)))
@@ -64,11 +98,17 @@ def time_steps(world: physics.World, seconds: float) -> tuple[int, float]:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--counts", type=int, nargs="+", default=[100, 1000, 10000])
+    parser.add_argument("--counts", type=int, nargs="*", default=[100, 1000, 10000],
+                        help="lattice sizes (default 100 1000 10000; none: skip them)")
     parser.add_argument("--seconds", type=float, default=0.25,
                         help="simulated seconds timed per scene (default 0.25, 60 steps)")
     parser.add_argument("--solver", action="append", choices=list(physics.SOLVERS),
                         help="solvers to time (default: both)")
+    parser.add_argument("--worst", action="store_true",
+                        help="also time spheres spawned at one point and overlapping")
+    parser.add_argument("--worst-counts", type=int, nargs="+", default=[1000, 10000])
+    parser.add_argument("--worst-steps", type=int, default=10,
+                        help="steps timed from the spawn in the worst cases (default 10)")
     parser.add_argument("--gpu", action="store_true",
                         help="also time the GPU step (gpu_shader.physics) for --gpu-counts")
     parser.add_argument("--gpu-counts", type=int, nargs="+", default=[100, 1000])
@@ -77,9 +117,10 @@ def main(argv=None) -> int:
     print(f"\nSpheres in a box, dt = 1/240 s, float64; {cpu_name()}, "
           f"{os.cpu_count()} cores; Python {platform.python_version()}, "
           f"NumPy {np.__version__}.\n")
-    print("| solver | spheres | contacts (last step) | steps/s | ms/step | "
-          "us per sphere-step | ratio to smallest |")
-    print("| --- | ---: | ---: | ---: | ---: | ---: | ---: |")
+    if args.counts:
+        print("| solver | spheres | contacts (last step) | steps/s | ms/step | "
+              "us per sphere-step | ratio to smallest |")
+        print("| --- | ---: | ---: | ---: | ---: | ---: | ---: |")
     for solver in args.solver or list(physics.SOLVERS):
         smallest = None
         for count in args.counts:
@@ -91,9 +132,29 @@ def main(argv=None) -> int:
             print(f"| {solver} | {count:,} | {contacts:,} | {steps / wall:.1f} | "
                   f"{1e3 * wall / steps:.2f} | {1e6 * per_sphere_step:.2f} | "
                   f"{per_sphere_step / smallest:.2f} |", flush=True)
+    if args.worst:
+        time_worst(args.worst_counts, args.worst_steps, args.solver or list(physics.SOLVERS))
     if args.gpu:
         time_gpu(args.gpu_counts, args.seconds)
     return 0
+
+
+def time_worst(counts, steps: int, solvers) -> None:
+    """Rows for crowds spawned at one point and overlapping, timed from the spawn."""
+    print(f"\nWorst cases: the first {steps} steps after the spawn, float64.\n")
+    print("| solver | spawn | spheres | first step ms | ms/step | pairs examined | "
+          "contacts (last step) | extent after (m) |")
+    print("| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |")
+    for solver in solvers:
+        for spawn in ("one point", "overlapping"):
+            for count in counts:
+                world = spawned_crowd(count, spawn, solver)
+                first, mean, examined = time_crowd(world, steps)
+                contacts = len(physics.contacts.find_contacts(world, world.slop))
+                extent = float(np.max(np.ptp(world.position, axis=0)))
+                shown = f"{examined:,}" if examined >= 0 else "not counted"
+                print(f"| {solver} | {spawn} | {count:,} | {first:.0f} | {mean:.0f} | {shown} | "
+                      f"{contacts:,} | {extent:.3f} |", flush=True)
 
 
 def time_gpu(counts, seconds: float) -> None:

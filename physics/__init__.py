@@ -1,7 +1,8 @@
 """Rigid-sphere physics with a fixed time step: the CPU ground truth the GPU step is checked against.
 
 `World` holds spheres and planes as arrays and steps them (world.py); `simulate` records a run
-as a `Trajectory`. One concept per module: integrators, contacts, impulses, solvers, continuous.
+as a `Trajectory`. One concept per module: integrators, contacts (with broadphase and crowds),
+impulses, solvers, continuous.
 """
 
 from physics.errors import PhysicsError

@@ -8,30 +8,49 @@ Cells are found by sorting a hash of their integer coordinates (Teschner et al. 
 "Optimized spatial hashing for collision detection of deformable objects"), so there is no
 table as large as the scene. Two different cells may share a hash: that only adds candidates,
 which the exact distance test then drops, so the answer is always exactly the brute-force one.
-A few bodies much larger than the rest (a boulder among marbles) would make every cell huge;
-they are tested against everyone directly instead.
+
+Spheres of very different sizes (boulders among marbles) would make every cell huge, so they
+are sorted into size classes a factor of 4 apart (`size_classes`), each with its own grid: a
+hierarchical grid (Ericson, Real-Time Collision Detection, 2005, ch. 7.2). Two spheres of one
+class meet in their class's grid; a sphere meets those of a larger class by looking up the 27
+cells around it in that class's grid, whose cells are wide enough for any such pair.
+
+Where spheres pile into each other (spawned at one point), every pair really overlaps and no
+grid helps; with ``crowd_window`` the work stays bounded there instead (crowds.py).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from physics.crowds import cell_capacity, crowd_pairs
+
 # Three large primes from Teschner et al. 2003; the hash mixes the cell coordinates with them.
 _PRIMES = np.array([73856093, 19349663, 83492791], dtype=np.int64)
-# The cell itself and 13 of its 26 neighbours: the other 13 are the opposites of these, so every
-# pair of neighbouring cells is visited once (from the cell with the smaller offset).
-_OFFSETS = np.array([(i, j, k) for i in (-1, 0, 1) for j in (-1, 0, 1) for k in (-1, 0, 1)
-                     if (i, j, k) >= (0, 0, 0)], dtype=np.int64)
+# All 27 cells around a cell, itself included, and the cell with the 13 of its neighbours that
+# come after it: the other 13 are their opposites, so every pair of neighbouring cells is
+# visited once (from the cell with the smaller offset).
+_ALL = np.array([(i, j, k) for i in (-1, 0, 1) for j in (-1, 0, 1) for k in (-1, 0, 1)],
+                dtype=np.int64)
+_OFFSETS = _ALL[[tuple(offset) >= (0, 0, 0) for offset in _ALL.tolist()]]
 SMALL_SCENE = 64    # below this many bodies, checking every pair is faster than the grid
-_LARGE = 4.0        # a body whose reach is over 4x the median is checked against all others
+CLASS_RATIO = 4.0   # the reaches of a size class span a factor of 4 (16 around the median)
+CROWD_WINDOW = 12   # in a crowd, each body is paired with its next 12 along a Morton curve
 
 
-def find_pairs(centre: np.ndarray, reach: np.ndarray):
+def find_pairs(centre: np.ndarray, reach: np.ndarray, crowd_window=None, counter=None):
     """Pairs (i < j) whose bounding spheres touch: brute force for a few bodies (less overhead),
-    the grid from SMALL_SCENE bodies on. Same answer either way; see `brute_force_pairs`."""
+    the grid from SMALL_SCENE bodies on. Same answer either way; see `brute_force_pairs`.
+
+    ``crowd_window`` (an int) bounds the work where bodies crowd into a cell, and ``counter``
+    (a collections.Counter) gets the number of candidate pairs tested added to its
+    ``"pairs examined"``; see `grid_pairs`.
+    """
     if len(centre) < SMALL_SCENE:
+        if counter is not None:
+            counter["pairs examined"] += len(centre) * (len(centre) - 1) // 2
         return brute_force_pairs(centre, reach)
-    return grid_pairs(centre, reach)
+    return grid_pairs(centre, reach, crowd_window, counter)
 
 
 def brute_force_pairs(centre: np.ndarray, reach: np.ndarray):
@@ -53,53 +72,145 @@ def brute_force_pairs(centre: np.ndarray, reach: np.ndarray):
     return _close(centre, reach, i.astype(np.int64), j.astype(np.int64))
 
 
-def grid_pairs(centre: np.ndarray, reach: np.ndarray):
-    """The same pairs as `brute_force_pairs`, found with a hashed uniform grid in ~O(N)."""
+def grid_pairs(centre: np.ndarray, reach: np.ndarray, crowd_window=None, counter=None):
+    """The same pairs as `brute_force_pairs`, found with hashed uniform grids in ~O(N).
+
+    Parameters
+    ----------
+    centre, reach : (N, 3) and (N,) ndarrays
+        As for `brute_force_pairs`: the bounding spheres' centres and radii (m).
+    crowd_window : int, optional
+        None (default): exactly the brute-force pairs, whatever it costs. An int W: bounded
+        work where a cell is crowded (`crowds.cell_capacity`): its bodies and those of the
+        cells around it are paired with their W successors in Morton order
+        (`crowds.crowd_pairs`), and a smaller sphere looking into a crowded cell of a larger
+        class meets only W of its bodies. Some touching pairs inside a crowd are then missed.
+    counter : collections.Counter, optional
+        ``counter["pairs examined"]`` grows by the number of candidate pairs tested.
+
+    Returns
+    -------
+    i, j : (M,) int64 ndarrays
+        The pairs, sorted by i then j.
+    """
     n = len(centre)
     if n < 2:
         return np.zeros(0, np.int64), np.zeros(0, np.int64)
-    large = reach > _LARGE * np.median(reach)
-    small = np.flatnonzero(~large)
-    i_small, j_small = (_grid_candidates(centre[small], reach[small]) if len(small) > 1
-                        else (np.zeros(0, np.int64), np.zeros(0, np.int64)))
-    i = [small[i_small]]
-    j = [small[j_small]]
-    for body in np.flatnonzero(large):       # few: each against every other body
-        others = np.arange(n, dtype=np.int64)
-        others = others[(others != body) & (~large | (others > body))]
-        i.append(np.full(len(others), body, np.int64))
-        j.append(others)
+    size_class = size_classes(reach)
+    classes = np.unique(size_class)
+    i, j = [], []
+    for index, this in enumerate(classes):
+        members = np.flatnonzero(size_class == this)
+        if len(members) > 1:
+            i_class, j_class = _grid_candidates(centre[members], reach[members], crowd_window)
+            i.append(members[i_class])
+            j.append(members[j_class])
+        for larger in classes[index + 1:]:
+            big = np.flatnonzero(size_class == larger)
+            i_small, j_big = _larger_candidates(centre[members], centre[big], reach[big],
+                                                crowd_window)
+            i.append(members[i_small])
+            j.append(big[j_big])
     i, j = np.concatenate(i), np.concatenate(j)
+    if counter is not None:
+        counter["pairs examined"] += len(i)
     i, j = np.minimum(i, j), np.maximum(i, j)
     i, j = _close(centre, reach, i, j)
     key = np.unique(i * n + j)                          # sorted, and each pair once
     return key // n, key % n
 
 
-def _grid_candidates(centre, reach):
-    """Candidate pairs (i < j) from neighbouring cells of a grid of cell size 2 max(reach)."""
+def size_classes(reach: np.ndarray) -> np.ndarray:
+    """The size class (N,) int of each reach: 0 within a factor CLASS_RATIO of the median, then
+    1, 2, ... for each further factor above it and -1, -2, ... below."""
+    scale = np.log(reach / np.median(reach)) / np.log(CLASS_RATIO)
+    return np.where(scale > 1, np.ceil(scale) - 1,
+                    np.where(scale < -1, np.floor(scale) + 1, 0)).astype(np.int64)
+
+
+def _grid_candidates(centre, reach, crowd_window=None):
+    """Candidate pairs (i < j) from neighbouring cells of a grid of cell size 2 max(reach).
+
+    With ``crowd_window``, the bodies of crowded cells are paired only by `crowd_pairs`, and
+    those of the cells around them both by it and by the grid (with each other).
+    """
     n = len(centre)
-    cell_size = 2.0 * float(np.max(reach))
-    cell = np.floor(centre / cell_size).astype(np.int64)
-    key = _hash(cell)
-    order = np.argsort(key, kind="stable")               # bodies grouped by cell
-    cell_keys, cell_start, cell_count = np.unique(key[order], return_index=True,
-                                                  return_counts=True)
+    grid = _Grid(centre, reach, crowd_window)
     i_parts, j_parts = [], []
+    count = grid.count
+    if grid.crowded.any():
+        # The crowd: the bodies of crowded cells and of the cells around them.
+        around = grid.lookup((grid.cells[grid.crowded][:, None, :] + _ALL).reshape(-1, 3))
+        near = grid.crowded.copy()
+        near[around[around >= 0]] = True
+        crowd = np.sort(grid.order[near[grid.cell_of_order]])
+        i_crowd, j_crowd = crowd_pairs(centre[crowd], crowd_window)
+        i_parts.append(crowd[i_crowd])
+        j_parts.append(crowd[j_crowd])
+        count = np.where(grid.crowded, 0, count)       # the grid pairs only uncrowded cells
+    own = grid.lookup(grid.cell)
     for offset in _OFFSETS:
-        neighbour = _hash(cell + offset)
-        slot = np.minimum(np.searchsorted(cell_keys, neighbour), len(cell_keys) - 1)
-        found = cell_keys[slot] == neighbour
-        start = cell_start[slot]
-        count = np.where(found, cell_count[slot], 0)
-        i = np.repeat(np.arange(n, dtype=np.int64), count)
-        # the positions start[k], ..., start[k] + count[k] - 1 for every body k, in one array
-        first = np.repeat(start - np.concatenate([[0], np.cumsum(count)[:-1]]), count)
-        j = order[first + np.arange(len(i))]
+        slot = grid.lookup(grid.cell + offset)
+        i, j = grid.members(slot, np.where((slot >= 0) & ~grid.crowded[own], count[slot], 0))
         keep = (i < j) if not offset.any() else (i != j)
         i_parts.append(np.minimum(i[keep], j[keep]))
         j_parts.append(np.maximum(i[keep], j[keep]))
     return np.concatenate(i_parts), np.concatenate(j_parts)
+
+
+def _larger_candidates(small_centre, centre, reach, crowd_window=None):
+    """Candidate pairs (i into small_centre, j into centre) between bodies of a smaller size class
+    and those of a larger one, from the 27 cells around each smaller body in the larger class's
+    grid. A pair that touches has |c_i - c_j| <= 2 max(reach), one cell, so none is missed."""
+    grid = _Grid(centre, reach, crowd_window)
+    count = grid.count
+    if crowd_window is not None:
+        count = np.where(grid.crowded, np.minimum(count, crowd_window), count)
+    cell = np.floor(small_centre / grid.cell_size).astype(np.int64)
+    i_parts, j_parts = [], []
+    for offset in _ALL:
+        slot = grid.lookup(cell + offset)
+        i, j = grid.members(slot, np.where(slot >= 0, count[slot], 0))
+        i_parts.append(i)
+        j_parts.append(j)
+    return np.concatenate(i_parts), np.concatenate(j_parts)
+
+
+class _Grid:
+    """M bodies hashed into cubic cells of side 2 max(reach), grouped by cell.
+
+    ``order`` lists the bodies cell by cell; cell k (in ``keys`` order) holds
+    order[start[k] : start[k] + count[k]] and has integer coordinates cells[k]. With a
+    ``crowd_window``, ``crowded`` marks the cells holding more than `crowds.cell_capacity`.
+    """
+
+    def __init__(self, centre, reach, crowd_window=None):
+        self.cell_size = 2.0 * float(np.max(reach))
+        self.cell = np.floor(centre / self.cell_size).astype(np.int64)
+        key = _hash(self.cell)
+        self.order = np.argsort(key, kind="stable")
+        self.keys, self.start, self.count = np.unique(key[self.order], return_index=True,
+                                                      return_counts=True)
+        self.cells = self.cell[self.order][self.start]
+        self.cell_of_order = np.repeat(np.arange(len(self.keys)), self.count)
+        self.crowded = np.zeros(len(self.keys), bool)
+        if crowd_window is not None:
+            smallest = np.minimum.reduceat(reach[self.order], self.start)
+            self.crowded = self.count > cell_capacity(self.cell_size, smallest)
+
+    def lookup(self, cells):
+        """The slot of each of the integer cells (K, 3) in ``keys``, -1 where it is empty."""
+        keys = _hash(cells)
+        slot = np.minimum(np.searchsorted(self.keys, keys), len(self.keys) - 1)
+        return np.where(self.keys[slot] == keys, slot, -1)
+
+    def members(self, slot, count):
+        """Pairs (k, body) for the first count[k] bodies of cell slot[k], for every k."""
+        i = np.repeat(np.arange(len(slot), dtype=np.int64), count)
+        # the positions start[k], ..., start[k] + count[k] - 1 for every k, in one array
+        first = np.repeat(self.start[slot] - np.concatenate([[0], np.cumsum(count)[:-1]]),
+                          count)
+        return i, self.order[first + np.arange(len(i))]
 
 
 def _hash(cell):

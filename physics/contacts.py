@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from physics.broadphase import find_pairs
+from physics.broadphase import CROWD_WINDOW, find_pairs
 from scene_model.geometry import dot
 
 FALLBACK_NORMAL = (0.0, 1.0, 0.0)
@@ -110,11 +110,14 @@ def spread_coincident(existing, new, distance, rng) -> np.ndarray:
             new[row] = new[row] + distance[row] * direction / np.sqrt(direction @ direction)
 
 
-def find_contacts(world, reach: float) -> Contacts:
+def find_contacts(world, reach: float, counter=None) -> Contacts:
     """Every contact with gap <= ``reach`` (m) among the active spheres of ``world``.
 
     Plane contacts come first, ordered by (sphere, plane), then sphere pairs ordered by (a, b)
     with a < b. The order depends only on the state, never on how the pairs were found.
+    Inside a crowd (spheres piled into each other far past touching, as when many are spawned
+    at one point) each sphere gets only the contacts of its nearest neighbours along a Morton
+    curve, so the work stays bounded (crowds.py). ``counter``: see `broadphase.find_pairs`.
     """
     n = world.count
     dtype = world.dtype
@@ -125,7 +128,7 @@ def find_contacts(world, reach: float) -> Contacts:
     body, plane = np.nonzero(gaps <= reach)             # row-major: sorted by (sphere, plane)
     plane_a = alive[body]
 
-    i, j = find_pairs(x[alive], r[alive] + 0.5 * reach)
+    i, j = find_pairs(x[alive], r[alive] + 0.5 * reach, CROWD_WINDOW, counter)
     a, b = alive[i], alive[j]
     normal, distance = sphere_sphere_normals(x, a, b)
     gap = distance - (r[a] + r[b])

@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from physics.broadphase import find_pairs
+from physics.broadphase import CROWD_WINDOW, find_pairs
 from physics.contacts import sphere_plane_gaps
 from physics.impulses import collision_impulse, cross, effective_masses
 from scene_model.geometry import dot
@@ -141,7 +141,7 @@ def _impact(world, body, plane, velocity, spin):
     return approach, j
 
 
-def stop_sphere_sweeps(start, end, radius, active, slop):
+def stop_sphere_sweeps(start, end, radius, active, slop, counter=None):
     """Stop spheres whose straight paths start -> end would make them pass into each other.
 
     Parameters
@@ -152,6 +152,9 @@ def stop_sphere_sweeps(start, end, radius, active, slop):
     active : (N,) bool
     slop : float
         Pairs that start closer than this are the contact solver's (m).
+    counter : collections.Counter, optional
+        Counts the candidate pairs (`broadphase.find_pairs`); in a crowd, as there, each
+        sphere is tested only against its nearest neighbours.
 
     Returns
     -------
@@ -164,7 +167,8 @@ def stop_sphere_sweeps(start, end, radius, active, slop):
         return stopped
     d = end - start
     length = np.sqrt(dot(d, d))
-    i, j = find_pairs(start[alive] + 0.5 * d[alive], radius[alive] + 0.5 * length[alive])
+    i, j = find_pairs(start[alive] + 0.5 * d[alive], radius[alive] + 0.5 * length[alive],
+                      CROWD_WINDOW, counter)
     a, b = alive[i], alive[j]
     p, q = start[a] - start[b], d[a] - d[b]
     reach = radius[a] + radius[b]

@@ -34,12 +34,14 @@ def positive(value, name: str) -> float:
     return number
 
 
-def in_range(value, name: str, low: float, high: float = np.inf) -> float:
-    """``value`` as a finite float in [low, high], or a PhysicsError naming ``name``."""
+def in_range(value, name: str, low: float, high: float = np.inf, unit: str = "") -> float:
+    """``value`` as a finite float in [low, high], or a PhysicsError naming ``name`` (and the
+    ``unit`` of the bounds, if given)."""
     number = finite(value, name)
     if not low <= number <= high:
-        where = f"at least {low}" if high == np.inf else f"between {low} and {high}"
-        raise PhysicsError(f"{name} must be {where} (got {value!r})")
+        where = f"at least {low}" if high == np.inf else f"between {low:g} and {high:g}"
+        raise PhysicsError(f"{name} must be {where}{' ' + unit if unit else ''} "
+                           f"(got {value!r})")
     return number
 
 
@@ -56,11 +58,14 @@ def finite(value, name: str) -> float:
     return number
 
 
-def whole_number(value, name: str, low: int) -> int:
-    """``value`` as an int >= ``low`` (bools and floats refused), or a PhysicsError naming it."""
+def whole_number(value, name: str, low: int, high: int | None = None) -> int:
+    """``value`` as an int in [low, high] (bools and floats refused), or a PhysicsError naming
+    it."""
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) \
             or value < low:
         raise PhysicsError(f"{name} must be a whole number of at least {low} (got {value!r})")
+    if high is not None and value > high:
+        raise PhysicsError(f"{name} must be at most {high:,} (got {value!r})")
     return int(value)
 
 

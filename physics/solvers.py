@@ -47,6 +47,8 @@ cradle behaves sequentially because the impact runs through the balls as a wave.
 
 from __future__ import annotations
 
+from collections import Counter
+
 import numpy as np
 
 from physics.impulses import (SolverBodies, apply_impulse, collision_impulse, contact_impulse,
@@ -57,7 +59,7 @@ SETTLED = 1e-9   # m/s: resting passes stop once none changes a velocity by more
 
 
 def solve_sequential(bodies: SolverBodies, contacts, gravity_part, h, threshold, iterations,
-                     warm):
+                     warm, counter=None):
     """Gauss-Seidel: contacts one by one in their fixed order. Updates ``bodies`` in place.
 
     Parameters
@@ -76,6 +78,10 @@ def solve_sequential(bodies: SolverBodies, contacts, gravity_part, h, threshold,
     warm : (K,) and (K, 3) ndarrays
         Resting impulses to start from (N s): last step's, for the contacts that persist
         (`warm_start`). Updated in place to this step's.
+    counter : collections.Counter, optional
+        Gets the work done added to ``"collision sweeps"`` and ``"resting passes"`` (each at
+        most ``iterations``) and, here only, ``"solver levels"`` (the levels that each sweep
+        and pass runs through, at most one per contact).
 
     Returns
     -------
@@ -87,10 +93,13 @@ def solve_sequential(bodies: SolverBodies, contacts, gravity_part, h, threshold,
     with. All contacts of a level are computed at once, with exactly the result of visiting
     them one by one.
     """
+    counter = Counter() if counter is None else counter
     k_normal, k_tangent = _masses(bodies, contacts, 1)
     levels = sequential_levels(contacts.a, contacts.b, len(bodies.velocity) - 1)
+    counter["solver levels"] += len(levels)
     collisions = []
     for _ in range(iterations):
+        counter["collision sweeps"] += 1
         collided = False
         for level in levels:
             hit = _collide(bodies, contacts, level, gravity_part, k_normal, k_tangent, threshold)
@@ -104,6 +113,7 @@ def solve_sequential(bodies: SolverBodies, contacts, gravity_part, h, threshold,
     _apply_warm_start(bodies, contacts, normal_total, tangent_total)
     target = _resting_target(contacts, h)
     for _ in range(iterations):
+        counter["resting passes"] += 1
         change = max((_rest(bodies, contacts, level, target, k_normal, k_tangent, normal_total,
                             tangent_total) for level in levels), default=0)
         if change < SETTLED:
@@ -112,16 +122,18 @@ def solve_sequential(bodies: SolverBodies, contacts, gravity_part, h, threshold,
 
 
 def solve_simultaneous(bodies: SolverBodies, contacts, gravity_part, h, threshold, iterations,
-                       warm):
+                       warm, counter=None):
     """Jacobi with mass splitting: all contacts from the same velocities, impulses summed.
 
     Same parameters and return value as `solve_sequential`. In a collision sweep a body's mass
     is shared among the contacts that collide in that sweep; in a resting pass, among all its
     contacts.
     """
+    counter = Counter() if counter is None else counter
     every = np.arange(len(contacts))
     collisions = []
     for _ in range(iterations):
+        counter["collision sweeps"] += 1
         hit = _collide_together(bodies, contacts, gravity_part, threshold)
         if hit is None:
             break
@@ -133,6 +145,7 @@ def solve_simultaneous(bodies: SolverBodies, contacts, gravity_part, h, threshol
     _apply_warm_start(bodies, contacts, normal_total, tangent_total)
     target = _resting_target(contacts, h)
     for _ in range(iterations):
+        counter["resting passes"] += 1
         if _rest(bodies, contacts, every, target, k_normal, k_tangent, normal_total,
                  tangent_total) < SETTLED:
             break
@@ -198,6 +211,8 @@ def separate_overlaps(position, contacts, inverse_mass, slop, fraction):
     kinetic energy appears (a Baumgarte velocity bias would turn the overlap into speed and
     launch the spheres). This is the position stage of Box2D v2 (b2ContactSolver::
     SolvePositionConstraints, with fraction 0.2 and a small slop left so contacts persist).
+    World.step runs it once a step, never more: the cap on push-out work. Moving bodies apart
+    can lift them, so it may add potential energy (docs/physics.md).
 
     position : (N, 3) m, updated in place; contacts : Contacts; inverse_mass : (N + 1,) 1/kg.
     """

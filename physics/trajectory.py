@@ -11,7 +11,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from physics.errors import in_range, whole_number
+from physics.errors import PhysicsError, in_range, whole_number
+from physics.world import MAX_STEPS
 
 
 @dataclass
@@ -70,7 +71,8 @@ def simulate(world, seconds, record_every: int = 1, step=None) -> Trajectory:
     ----------
     world : World
     seconds : float
-        How long to simulate (s): round(seconds / dt) steps.
+        How long to simulate (s): round(seconds / dt) steps, at most MAX_STEPS (physics.world)
+        of them.
     record_every : int
         Record the state every this many steps; the state before the first step is always
         recorded, and so is the last.
@@ -85,6 +87,9 @@ def simulate(world, seconds, record_every: int = 1, step=None) -> Trajectory:
     Trajectory
     """
     seconds = in_range(seconds, "seconds", 0)
+    if seconds / world.dt > MAX_STEPS:
+        raise PhysicsError(f"seconds must be at most {MAX_STEPS * world.dt:.3g} s (that is "
+                           f"{MAX_STEPS:,} steps of dt = {world.dt:g} s; got {seconds!r})")
     record_every = whole_number(record_every, "record_every", 1)
     step = world.step if step is None else step
     total = int(round(seconds / world.dt))

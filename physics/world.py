@@ -9,6 +9,7 @@ test, the push-out of overlaps, and the removal of bodies that leave the bounds.
 from __future__ import annotations
 
 import copy
+from collections import Counter
 
 import numpy as np
 
@@ -24,6 +25,11 @@ from physics.solvers import SOLVERS, contact_keys, separate_overlaps, warm_start
 from scene_model.geometry import dot
 
 SPAWN_OFFSET = 1e-3     # a sphere spawned on another's centre is moved this many radii away
+# A step shorter than a microsecond needs a million steps per simulated second; one longer than
+# a tenth of a second skips through thin contacts (a ball falling from 1 m arrives at 4.4 m/s,
+# 0.44 m a step). Outside the range the run would be endless or meaningless.
+MIN_DT, MAX_DT = 1e-6, 0.1     # s; the same range as scene_model.bodies.PhysicsSettings.dt
+MAX_STEPS = 10 ** 9     # most steps one call may ask for: 1e9 steps are days of computing
 
 
 class World:
@@ -34,7 +40,7 @@ class World:
     gravity : (3,) array_like
         Acceleration of gravity (m/s^2).
     dt : float
-        Time step (s). Fixed: a step never depends on a frame rate.
+        Time step (s), from MIN_DT to MAX_DT. Fixed: a step never depends on a frame rate.
     integrator : {"semi_implicit", "explicit", "verlet"}
         See integrators.py.
     solver : {"sequential", "simultaneous"}
@@ -61,7 +67,7 @@ class World:
                  restitution_threshold=0.01, slop=1e-4, push_out=0.2):
         self.dtype = float_dtype(dtype)
         self.gravity = vector3(gravity, "gravity").astype(self.dtype)
-        self.dt = positive(dt, "dt")
+        self.dt = in_range(dt, "dt", MIN_DT, MAX_DT, "s")
         self.integrator = choice(integrator, "integrator", list(INTEGRATORS))
         self.solver = choice(solver, "solver", list(SOLVERS))
         self.seed = whole_number(seed, "seed", 0)
@@ -81,6 +87,7 @@ class World:
         self.plane_restitution, self.plane_friction = empty(), empty()
         self._events = []
         self._resting_impulses = None     # (keys, normal, tangent) of last step's contacts
+        self.work = Counter()             # what the last step did: see `World.step`
 
     # --- building -----------------------------------------------------------------------
 
@@ -160,10 +167,12 @@ class World:
         return np.arange(first, first + m)
 
     def add_plane(self, normal, offset, restitution=0.0, friction=0.5) -> int:
-        """Add the static plane ``normal . x = offset`` (solid on the side away from ``normal``).
+        """Add the static plane ``normal/|normal| . x = offset`` (solid on the side away from
+        ``normal``) and return its index.
 
-        ``normal`` need not be unit length (both sides are divided by its length) but must not
-        be zero. Returns the plane's index.
+        ``normal`` need not be unit length but must not be zero: it is normalised and
+        ``offset`` is the plane's signed distance from the origin (m), as in the renderer and
+        the scene format. So ``add_plane((0, 2, 0), 1)`` is the floor y = 1.
         """
         normal = vector3(normal, "normal")
         length = float(np.sqrt(normal @ normal))
@@ -172,7 +181,7 @@ class World:
         offset = finite(offset, "offset")
         grow = lambda old, new: np.concatenate([old, np.asarray(new, self.dtype)])  # noqa: E731
         self.plane_normal = grow(self.plane_normal, [normal / length])
-        self.plane_offset = grow(self.plane_offset, [offset / length])
+        self.plane_offset = grow(self.plane_offset, [offset])
         self.plane_restitution = grow(self.plane_restitution,
                                       [in_range(restitution, "restitution", 0, 1)])
         self.plane_friction = grow(self.plane_friction, [in_range(friction, "friction", 0)])
@@ -245,8 +254,17 @@ class World:
     # --- stepping -----------------------------------------------------------------------
 
     def step(self, n: int = 1) -> None:
-        """Advance the world by ``n`` steps of ``dt``."""
-        for _ in range(whole_number(n, "n", 0)):
+        """Advance the world by ``n`` steps of ``dt`` (0 to MAX_STEPS).
+
+        Afterwards ``world.work`` (a collections.Counter) says what the last step did:
+        ``"pairs examined"`` by the broad phase (contacts and swept test), ``"contacts"``,
+        ``"collision sweeps"`` and ``"resting passes"`` (each at most ``iterations``),
+        ``"solver levels"`` (sequential solver) and ``"push-out passes"`` (one). Inside a
+        crowd of overlapping spheres the broad phase pairs each sphere with a bounded number of
+        neighbours (broadphase.py), so every one of these counts grows at most linearly with
+        the number of spheres.
+        """
+        for _ in range(whole_number(n, "n", 0, MAX_STEPS)):
             self._step()
 
     def _step(self) -> None:
@@ -262,11 +280,13 @@ class World:
         # 2. find contacts at x_n. A sphere still approaching a plane it has not reached (gap
         # >= 0) is left to the continuous test below, which finds the moment it reaches the
         # plane: bouncing it here, a little above the plane, would use the wrong speed.
-        contacts = find_contacts(self, self.slop)
+        work = Counter()
+        contacts = find_contacts(self, self.slop, work)
         approach = -dot(contacts.normal, v_old[contacts.a])
         arriving = (contacts.plane >= 0) & (contacts.gap >= 0) & (
             approach > self.restitution_threshold)
         contacts = contacts.select(~arriving)
+        work["contacts"] = len(contacts)
 
         # 3. resolve contacts: impulses turn v* into v_{n+1}
         pad = lambda array: np.concatenate([array, np.zeros((1,) + array.shape[1:],  # noqa: E731
@@ -280,7 +300,8 @@ class World:
         order = np.argsort(keys, kind="stable")
         warm = warm_start(keys, self._resting_impulses, self.dtype)
         collisions = SOLVERS[self.solver](bodies, contacts, gravity_part.astype(self.dtype), h,
-                                          self.restitution_threshold, self.iterations, warm)
+                                          self.restitution_threshold, self.iterations, warm,
+                                          counter=work)
         self._resting_impulses = (keys[order], warm[0][order], warm[1][order])
         v_new, spin = bodies.velocity[:n], bodies.spin[:n]
 
@@ -302,9 +323,12 @@ class World:
         v_new[bounced] = (end_velocity[bounced]
                           - (scheme.weight - 0.5) * h * end_acceleration[bounced])
         # ... and stop spheres at their first touch with another.
-        stop_sphere_sweeps(x_old, x_new, self.radius, moving, self.slop)
+        stop_sphere_sweeps(x_old, x_new, self.radius, moving, self.slop, work)
 
+        # One push-out pass a step, never more: it removes ``push_out`` of each overlap.
         separate_overlaps(x_new, contacts, bodies.inverse_mass, self.slop, self.push_out)
+        work["push-out passes"] += 1
+        self.work = work
 
         self.position, self.velocity, self.angular_velocity = x_new, v_new, spin
         self.steps += 1

@@ -1,6 +1,8 @@
 """The broad phase finds exactly the pairs that checking every pair finds, and contacts come out
 in the same fixed order whichever way the pairs were found."""
 
+from collections import Counter
+
 import numpy as np
 from hypothesis import given
 from hypothesis import strategies as st
@@ -61,3 +63,18 @@ def test_contacts_of_200_spheres_match_an_all_pairs_check_in_the_same_order():
     assert np.array_equal(contacts.b[pairs], j[close])
     below = np.flatnonzero(x[:, 1] - r <= world.slop)
     assert np.array_equal(contacts.a[~pairs], below)
+
+
+def test_half_the_spheres_ten_times_larger_are_paired_exactly_from_a_linear_count_of_candidates():
+    """Many large spheres among small ones: each size class has its own grid (a hierarchical
+    grid), so 4,000 spheres, half of them 10x larger, need a few hundred candidates, not
+    the 6 million that testing each large one against everyone took."""
+    rng = np.random.default_rng(11)
+    centre = rng.uniform(0, 60, size=(4000, 3))
+    reach = np.where(rng.permutation(4000) < 2001, 0.05, 0.5)
+    counter = Counter()
+    i, j = grid_pairs(centre, reach, counter=counter)
+    expected_i, expected_j = brute_force_pairs(centre, reach)
+    assert len(i) > 10
+    assert np.array_equal(i, expected_i) and np.array_equal(j, expected_j)
+    assert counter["pairs examined"] <= len(centre)
