@@ -17,6 +17,7 @@ an animation's length     seconds x fps frames                            `MAX_F
 an animation's memory     frames x pixels x `ANIMATION_BYTES_PER_PIXEL`   `MAX_ANIMATION_BYTES`
 physics                   steps (seconds / dt) x bodies                   `MAX_BODY_STEPS`
 a benchmark               its renders' ray steps, as for rendering        `MAX_BENCH_RAY_STEPS`
+the Embree ground truth   resolution^3 marching-cubes cells per part      `MAX_MESH_CELLS`
 ========================  ==============================================  ===================
 
 "Ray steps" count SDF evaluations as if every ray used all ``max_steps``: the NumPy reference
@@ -37,6 +38,7 @@ ANIMATION_BYTES_PER_PIXEL = 8           # the 8-bit frames kept until encoded, a
 MAX_ANIMATION_BYTES = MAX_IMAGE_BYTES   # copies of them
 MAX_BODY_STEPS = 5_000_000              # bounce (6 bodies) for 58 minutes at dt = 1/240 s
 MAX_BENCH_RAY_STEPS = 1_000_000_000_000  # `marchlab bench accuracy` at its defaults: 4.7e10
+MAX_MESH_CELLS = 2_000_000_000          # 15 parts at --resolution 512, about 3 minutes here
 
 PYTHON = "pass allow_large=True to go ahead"
 COMMAND_LINE = "add --allow-large to go ahead"
@@ -116,3 +118,18 @@ def count(n: int | float) -> str:
         return f"{n:,}"
     digits = str(int(n))
     return f"{digits[0]}.{digits[1:3]}e+{len(digits) - 1:02d}"
+
+
+def check_truth(scene: Scene, resolution: int, allow_large: bool = False,
+                lift: str = PYTHON) -> None:
+    """Refuse an Embree ground truth of ``scene`` whose meshing is beyond `MAX_MESH_CELLS`:
+    every part but a plane counted as marched at ``resolution`` cells a side (at worst:
+    spheres and boxes are tessellated more cheaply)."""
+    from reference_cpu.truth.parts import scene_parts
+    from scene_model.scene import rendered_scene
+    from scene_model.shapes import Plane
+    meshed = sum(not isinstance(part.leaf, Plane)
+                 for part in scene_parts(rendered_scene(scene).objects))
+    check(meshed * resolution ** 3, MAX_MESH_CELLS,
+          f"meshing {meshed} parts at {resolution} cells a side", "marching-cubes cells at worst",
+          allow_large, lift)

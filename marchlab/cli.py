@@ -29,8 +29,9 @@ DASHED_VALUE_OPTIONS = ("--size", "--seconds", "--fps", "--resolution")
 # (tests/truth/test_truth_cli.py keeps the two equal).
 TRUTH_METHODS = ("analytic", "embree")
 MAX_RESOLUTION = 512    # a 517^3 float64 grid is already 1.1 GB
-ALLOW_LARGE_HELP = ("go ahead with a job beyond the budget (too many pixels, ray steps, frames "
-                    "or physics steps: see marchlab/budget.py), which is otherwise refused")
+ALLOW_LARGE_HELP = ("go ahead with a job beyond the budget (too many pixels, ray steps, frames, "
+                    "physics steps or meshing cells: see marchlab/budget.py), which is otherwise "
+                    "refused")
 
 
 class Parser(argparse.ArgumentParser):
@@ -198,6 +199,7 @@ def build_parser() -> Parser:
                    help="image size in pixels (default: 640x480)")
     p.add_argument("--resolution", type=grid_resolution, default=128, metavar="N",
                    help="embree: marching-cubes cells across each meshed shape (default: 128)")
+    p.add_argument("--allow-large", action="store_true", help=ALLOW_LARGE_HELP)
     p.add_argument("--set", action="extend", nargs="+", default=[], metavar="FIELD=VALUE",
                    help="override scene fields, e.g. --set camera.fov=40")
     p.set_defaults(func=cmd_truth)

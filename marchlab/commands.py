@@ -27,7 +27,7 @@ from scene_model.scene import rendered_scene, scene_at
 from scene_model.scenefile import bundled_scene_names, load_scene, scene_to_toml
 
 from .budget import (COMMAND_LINE, MAX_BENCH_RAY_STEPS, check, check_animation, check_image,
-                     check_render)
+                     check_render, check_truth)
 from .outputs import check_outputs, make_folders
 from .render import BACKENDS, backend_problem, render
 
@@ -79,7 +79,11 @@ def progress_bar(total: int, unit: str = "px"):
     from tqdm import tqdm
     with tqdm(total=total, unit=unit, unit_scale=unit == "px", delay=1.0, leave=False,
               file=sys.stderr) as bar:
-        yield lambda done, _total: bar.update(done - bar.n)
+        def report(done, total):
+            if total != bar.total:          # a job that learns its size as it goes
+                bar.total = total
+            bar.update(done - bar.n)
+        yield report
 
 
 def cmd_scenes(args) -> int:
@@ -230,11 +234,15 @@ def cmd_truth(args) -> int:
     width, height = args.size
     with about_options(f"--size {width}x{height}"):
         check_image(width, height, lift="ask for a smaller --size")
+    if args.method == "embree":
+        with about_options(f"--resolution {args.resolution}"):
+            check_truth(scene, args.resolution, args.allow_large, COMMAND_LINE)
     from reference_cpu.truth import ground_truth
     start = time.perf_counter()
     try:
-        truth = ground_truth(scene, width, height, method=args.method,
-                             resolution=args.resolution)
+        with progress_bar(1, unit="step") as progress:
+            truth = ground_truth(scene, width, height, method=args.method,
+                                 resolution=args.resolution, progress=progress)
     except SceneError as err:
         raise err.in_file(args.scene) from None
     seconds = time.perf_counter() - start

@@ -179,3 +179,34 @@ def test_the_limits_in_the_command_line_reference_are_the_budget():
     assert f"{budget.MAX_BODY_STEPS:,} body steps" in text
     assert f"{budget.MAX_BENCH_RAY_STEPS:.0e} ray steps".replace("e+", "e") in text
     assert f"{budget.MAX_ANIMATION_BYTES // 2**30} GiB" in text
+
+
+# --- The Embree ground truth ----------------------------------------------------------------
+
+def test_an_embree_truth_over_the_meshing_budget_is_refused_before_meshing(tmp_path, capsys,
+                                                                           monkeypatch):
+    """primitives has 7 parts to mesh besides its floor: 7 x 512^3 = 9.4e8 cells, over a
+    limit lowered to 1e8; at 256 a side, 7 x 256^3 = 1.2e8 is still over, 128 is under."""
+    monkeypatch.setattr(budget, "MAX_MESH_CELLS", 100_000_000)
+    monkeypatch.setattr("reference_cpu.truth.mesh.part_mesh", lambda *a, **k: pytest.fail(
+        "meshing started before the job was refused"))
+    out = tmp_path / "t.npz"
+    code, _, err = run_cli(capsys, "truth", "primitives", "--method", "embree",
+                           "--resolution", "512", "-o", out)
+    assert_one_line_error(code, err)
+    assert ("--resolution 512: meshing 7 parts at 512 cells a side: 9.39e+08 marching-cubes "
+            "cells at worst is more than the limit of 1.00e+08; add --allow-large") in err, err
+    assert not out.exists()
+    with pytest.raises(BudgetError, match=r"7 parts at 256 .* pass allow_large=True"):
+        budget.check_truth(load_scene("primitives"), 256)
+    budget.check_truth(load_scene("primitives"), 128)
+
+
+def test_an_embree_truth_reports_progress_part_by_part_and_ends_at_its_total():
+    pytest.importorskip("embreex")
+    from reference_cpu.truth import ground_truth
+    calls = []
+    ground_truth(load_scene("csg"), 8, 6, method="embree", resolution=8,
+                 progress=lambda done, total: calls.append((done, total)))
+    parts = 5                                   # the floor and four shapes
+    assert calls == [(k, parts + 1) for k in range(1, parts + 2)]

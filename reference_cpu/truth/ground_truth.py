@@ -82,7 +82,7 @@ class Truth:
 
 
 def ground_truth(scene: Scene, width: int, height: int, method: str = "analytic",
-                 resolution: int = DEFAULT_RESOLUTION) -> Truth:
+                 resolution: int = DEFAULT_RESOLUTION, progress=None) -> Truth:
     """The ground truth of ``scene`` seen by its camera at ``width`` x ``height`` pixels.
 
     Parameters
@@ -93,6 +93,9 @@ def ground_truth(scene: Scene, width: int, height: int, method: str = "analytic"
     method : {"analytic", "embree"}
     resolution : int
         Embree only: marching-cubes cells across each meshed part's bounding sphere.
+    progress : callable(done, total), optional
+        Embree only: called after each part is meshed and once the rays are cast (meshing
+        at a high resolution takes seconds a part).
 
     Raises
     ------
@@ -117,7 +120,7 @@ def ground_truth(scene: Scene, width: int, height: int, method: str = "analytic"
         terms = {}
     else:
         t, normal, object_id, rounding, terms = _trace_embree(parts, scene, origin, rays,
-                                                              resolution)
+                                                              resolution, progress)
 
     # The contract's far limit: a surface beyond max_distance is not seen.
     beyond = t > scene.render.max_distance
@@ -149,7 +152,8 @@ def measured_errors(objects, origin, directions, t) -> tuple[float, float]:
     return float(error.max()), float(np.percentile(error, 99))
 
 
-def _trace_embree(parts: list[Part], scene: Scene, origin, rays, resolution: int):
+def _trace_embree(parts: list[Part], scene: Scene, origin, rays, resolution: int,
+                  progress=None):
     """Mesh every part, cast the rays with Embree, and label the hits with object ids.
 
     Returns t, normal, object_id, the rounding bound of each ray, and the mesh error terms.
@@ -167,7 +171,11 @@ def _trace_embree(parts: list[Part], scene: Scene, origin, rays, resolution: int
                 {"mesh": 0.0, "tessellation": 0.0})
     # A plane's square reaches a little past max_distance, so every hit within it is found.
     reach = 1.01 * scene.render.max_distance
-    meshes = [part_mesh(part, resolution, origin, reach) for part in parts]
+    report = progress or (lambda done, total: None)
+    meshes = []
+    for part in parts:
+        meshes.append(part_mesh(part, resolution, origin, reach))
+        report(len(meshes), len(parts) + 1)        # the last step: casting the rays
     sdfs = [part_sdf(part) for part in parts]
     marched = [m.method == "marching cubes" for m in meshes]
     mesh_term = max((m.bound for m, mc in zip(meshes, marched) if mc), default=0.0)
@@ -188,6 +196,7 @@ def _trace_embree(parts: list[Part], scene: Scene, origin, rays, resolution: int
 
     t, normal, part, rounding = cast(meshes, origin, rays, inside_other if len(parts) > 1
                                      else None)
+    report(len(parts) + 1, len(parts) + 1)
     object_id = np.full(n, -1, np.int32)
     for j, (p, sdf) in enumerate(zip(parts, sdfs)):
         on = part == j
