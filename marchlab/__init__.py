@@ -1,6 +1,6 @@
 """marchlab: a teaching toolkit for sphere tracing, Phong lighting, shadows and reflections.
 
-The front door: `render` with a choice of backend, and the scene model's everyday names
+The front door: `render` with a choice of backend, `probe` for one pixel's march, and the scene model's everyday names
 (`Scene`, `load_scene`, `Frame`, ...; they live in `scene_model`). Backends are imported only
 when used; the command line, comparisons, simulation and reports are modules of their own.
 """
@@ -12,11 +12,12 @@ from scene_model.scene import (Camera, Checker, DirectionalLight, Fog, Material,
                                RenderSettings, Scene, SkyBackground, SolidBackground, SpotLight)
 from scene_model.scenefile import bundled_scene_names, load_scene, save_scene
 
+from .probe import probe
 from .render import BACKENDS, render
 
 __version__ = "0.1.0"
 
-__all__ = ["camera_rays", "render", "load_scene", "save_scene", "bundled_scene_names", "Frame",
+__all__ = ["camera_rays", "render", "probe", "load_scene", "save_scene", "bundled_scene_names", "Frame",
            "Scene", "Camera", "RenderSettings", "Material", "Checker", "PointLight",
            "DirectionalLight", "SpotLight", "Fog", "SkyBackground", "SolidBackground",
            "BACKENDS", "MarchlabError", "SceneError"]
