@@ -34,6 +34,15 @@ from .render import BACKENDS, backend_problem, render
 OUTPUT_SUFFIXES = (".png", ".npz")
 
 
+def refuse_empty_paths(args, *options: str) -> None:
+    """Refuse an option given as an empty path (``-o ''``): a slip, never a wish for the
+    default name or for the current folder."""
+    for option in options:
+        value = getattr(args, option.lstrip("-"), None)
+        if value is not None and not value.strip():
+            raise MarchlabError(f"{option}: an empty path (name a file or a folder)")
+
+
 @contextmanager
 def about_options(options: str):
     """Begin a refusal raised inside with the ``options`` it is about (``--size 10000x10000``),
@@ -46,6 +55,7 @@ def about_options(options: str):
 
 def cmd_render(args) -> int:
     """``marchlab render``: one frame of a scene to a PNG (one buffer) or an .npz (all)."""
+    refuse_empty_paths(args, "--output")
     output = Path(args.output) if args.output else Path(f"{Path(args.scene).stem}.png")
     if output.suffix.lower() not in OUTPUT_SUFFIXES:
         raise MarchlabError(f"{output}: unsupported output format {output.suffix!r} "
@@ -119,6 +129,7 @@ def cmd_compare(args) -> int:
     """``marchlab compare``: two backends' frames against the gates; exit 1 if one fails."""
     from .compare import (GATE_LEGEND, compare_frames, failures, gate_notes, gates_against,
                           write_difference_images)
+    refuse_empty_paths(args, "--save")
     check_outputs(folders=[args.save])
     scene = load_scene(args.scene, args.set)
     width, height = args.size
@@ -169,6 +180,7 @@ def cmd_simulate(args) -> int:
     from physics import PhysicsError
     from .animation import FORMATS, gif_bytes, mp4_bytes, mp4_problem
     from .simulation import frame_plan, physics_settings, simulate_scene
+    refuse_empty_paths(args, "--output", "--csv")
     output = Path(args.output) if args.output else Path(f"{Path(args.scene).stem}.gif")
     kind = output.suffix.lower()
     if kind not in FORMATS:
@@ -226,6 +238,7 @@ def cmd_simulate(args) -> int:
 def cmd_truth(args) -> int:
     """``marchlab truth``: depth, normal and hit without sphere tracing, to an .npz file."""
     import numpy as np
+    refuse_empty_paths(args, "--output")
     output = Path(args.output) if args.output else Path(f"{Path(args.scene).stem}-truth.npz")
     if output.suffix.lower() != ".npz":
         raise MarchlabError(f"{output}: unsupported output format {output.suffix!r} (use .npz)")
@@ -264,9 +277,7 @@ def cmd_bench_accuracy(args) -> int:
     takes minutes, and written together after it.
     """
     from .accuracy_report import plan_run, run
-    for option, value in (("--output", args.output), ("--images", args.images)):
-        if value is not None and not value.strip():
-            raise MarchlabError(f"{option}: an empty path (name a file or a folder)")
+    refuse_empty_paths(args, "--output", "--images")
     output = Path(args.output)
     if output.suffix.lower() != ".md":
         raise MarchlabError(f"{output}: the report is Markdown (use a .md file)")
