@@ -15,7 +15,7 @@ from .files import write_atomically
 AOVS = ("color", "depth", "normal", "steps")
 
 
-@dataclass
+@dataclass(repr=False)
 class Frame:
     """One rendered image and its auxiliary buffers, for an image of H rows and W columns.
 
@@ -85,13 +85,29 @@ class Frame:
             return to_uint8(heat(self.steps / self.max_steps))
         raise MarchlabError(f"unknown AOV {aov!r} (one of: {', '.join(AOVS)})")
 
+    def png(self, aov: str = "color") -> bytes:
+        """The PNG file of `image` (``aov``), as bytes."""
+        from PIL import Image
+        buffer = io.BytesIO()
+        Image.fromarray(self.image(aov)).save(buffer, format="PNG")
+        return buffer.getvalue()
+
+    def _repr_png_(self) -> bytes:
+        """A notebook shows a frame as its picture (IPython's rich display protocol)."""
+        return self.png()
+
+    def __repr__(self) -> str:
+        """One line, not every buffer: ``Frame(640x480, numpy float64, 206,426 of 307,200
+        pixels hit)``."""
+        return (f"Frame({self.width}x{self.height}, {self.backend} {self.precision}, "
+                f"{int(self.hit.sum()):,} of {self.hit.size:,} pixels hit)")
+
     def save(self, path, aov: str = "color") -> None:
         """Write a PNG (8-bit, of ``aov``) or an .npz (every buffer), never half-written."""
         path = Path(path)
         buffer = io.BytesIO()
         if path.suffix.lower() == ".png":
-            from PIL import Image
-            Image.fromarray(self.image(aov)).save(buffer, format="PNG")
+            buffer.write(self.png(aov))
         elif path.suffix.lower() == ".npz":
             np.savez_compressed(buffer, color=self.color, depth=self.depth, normal=self.normal,
                                 steps=self.steps, object_id=self.object_id, hit=self.hit,
