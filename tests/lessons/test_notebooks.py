@@ -46,6 +46,12 @@ def test_there_are_lessons():
     assert len(NOTEBOOKS) >= 4, f"expected the lessons in {LESSONS}"
 
 
+def test_the_lessons_readme_has_a_line_for_every_lesson():
+    readme = (LESSONS / "README.md").read_text()
+    missing = [p.name for p in sorted(LESSONS.glob("*.ipynb")) if f"| `{p.name}` |" not in readme]
+    assert not missing, f"lessons/README.md does not list {missing}"
+
+
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=lesson_id)
 def test_lesson_runs_top_to_bottom_without_error(path, kernel_specs):
     from jupyter_client.kernelspec import KernelSpecManager
