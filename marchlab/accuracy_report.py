@@ -20,6 +20,7 @@ from .accuracy import (TOLERANCES, Row, backends_present, embree_problem, numpy_
                        recommend, settings_grid, sweep, sweep_ray_steps, sweep_scenes)
 from .accuracy_truth import TRUTH_RESOLUTION, SceneTruth, p99, scene_truth, statistic, truth_method
 from .budget import MAX_BENCH_RAY_STEPS, check
+from .outputs import make_folders
 
 # The scenes whose time-against-error plot the report shows (docs/images is committed).
 PLOTTED = ("classroom", "boxes", "csg")
@@ -315,8 +316,7 @@ def write_report(rows: list[Row], markdown, image_dir, command: str, size, repea
         plot(rows, scene, buffer)
         payloads[path] = buffer.getvalue()
     payloads[markdown] = ("\n".join(out) + "\n").encode()
-    for path in payloads:
-        path.parent.mkdir(parents=True, exist_ok=True)
+    make_folders(*payloads)
     write_together(payloads)
     return list(payloads)
 

@@ -29,9 +29,14 @@ DASHED_VALUE_OPTIONS = ("--size", "--seconds", "--fps", "--resolution")
 # (tests/truth/test_truth_cli.py keeps the two equal).
 TRUTH_METHODS = ("analytic", "embree")
 MAX_RESOLUTION = 512    # a 517^3 float64 grid is already 1.1 GB
-ALLOW_LARGE_HELP = ("go ahead with a job beyond the budget (too many pixels, ray steps, frames, "
-                    "physics steps or meshing cells: see marchlab/budget.py), which is otherwise "
-                    "refused")
+
+
+def add_allow_large(parser) -> None:
+    """The ``--allow-large`` flag of every command that estimates its work first."""
+    parser.add_argument("--allow-large", action="store_true",
+                        help="go ahead with a job beyond the budget (too many pixels, ray "
+                             "steps, frames, physics steps or meshing cells: see "
+                             "marchlab/budget.py), which is otherwise refused")
 
 
 class Parser(argparse.ArgumentParser):
@@ -117,8 +122,7 @@ def build_parser() -> Parser:
                    help="buffer written to a PNG (an .npz holds them all)")
     p.add_argument("--set", action="extend", nargs="+", default=[], metavar="FIELD=VALUE",
                    help="override scene fields, e.g. --set render.max_steps=64 camera.fov=40")
-    p.add_argument("--allow-large", action="store_true",
-                   help=ALLOW_LARGE_HELP)
+    add_allow_large(p)
     p.set_defaults(func=cmd_render)
 
     p = sub.add_parser("scenes", help="list the bundled scenes")
@@ -161,8 +165,7 @@ def build_parser() -> Parser:
     p.add_argument("--save", metavar="DIR",
                    help="also write both images, an amplified difference and the error mask")
     p.add_argument("--set", action="extend", nargs="+", default=[], metavar="FIELD=VALUE")
-    p.add_argument("--allow-large", action="store_true",
-                   help=ALLOW_LARGE_HELP)
+    add_allow_large(p)
     p.set_defaults(func=cmd_compare)
 
     p = sub.add_parser("simulate", help="step a scene's [[bodies]] with the physics module and "
@@ -183,8 +186,7 @@ def build_parser() -> Parser:
     p.add_argument("--set", action="extend", nargs="+", default=[], metavar="FIELD=VALUE",
                    help="override scene fields, e.g. --set physics.dt=0.001 "
                         "bodies[0].restitution=0.9")
-    p.add_argument("--allow-large", action="store_true",
-                   help=ALLOW_LARGE_HELP)
+    add_allow_large(p)
     p.set_defaults(func=cmd_simulate)
 
     p = sub.add_parser("truth", help="compute a scene's ground truth without sphere tracing "
@@ -199,7 +201,7 @@ def build_parser() -> Parser:
                    help="image size in pixels (default: 640x480)")
     p.add_argument("--resolution", type=grid_resolution, default=128, metavar="N",
                    help="embree: marching-cubes cells across each meshed shape (default: 128)")
-    p.add_argument("--allow-large", action="store_true", help=ALLOW_LARGE_HELP)
+    add_allow_large(p)
     p.add_argument("--set", action="extend", nargs="+", default=[], metavar="FIELD=VALUE",
                    help="override scene fields, e.g. --set camera.fov=40")
     p.set_defaults(func=cmd_truth)
@@ -221,7 +223,7 @@ def build_parser() -> Parser:
     q.add_argument("--quick", action="store_true",
                    help="two scenes (one per kind of truth, coarse Embree grid), two settings: "
                         "check that the report can be made")
-    q.add_argument("--allow-large", action="store_true", help=ALLOW_LARGE_HELP)
+    add_allow_large(q)
     q.set_defaults(func=cmd_bench_accuracy)
     add_doctor_parser(sub)
     return parser

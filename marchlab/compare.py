@@ -187,7 +187,8 @@ def _ssim(a: np.ndarray, b: np.ndarray) -> float:
         from skimage.metrics import structural_similarity
     except ImportError:
         return float("nan")
-    window = min(7, min(a.shape[:2]) - (1 - min(a.shape[:2]) % 2))
+    side = min(a.shape[:2])
+    window = min(7, side if side % 2 else side - 1)
     if window < 3:
         return float("nan")
     return float(structural_similarity(a, b, channel_axis=-1, data_range=1.0, win_size=window))

@@ -224,8 +224,9 @@ def simulate_scene(scene: Scene, plan: FramePlan, dtype=np.float64, *,
         # The same steps as world.step(n), in slices short enough to show progress.
         nonlocal done
         for start in range(0, n, PROGRESS_STEPS):
-            world.step(min(PROGRESS_STEPS, n - start))
-            done += min(PROGRESS_STEPS, n - start)
+            count = min(PROGRESS_STEPS, n - start)
+            world.step(count)
+            done += count
             if progress is not None:
                 progress(done, plan.steps)
 

@@ -98,18 +98,17 @@ def grid_pairs(centre: np.ndarray, reach: np.ndarray, crowd_window=None, counter
         return np.zeros(0, np.int64), np.zeros(0, np.int64)
     size_class = size_classes(reach)
     classes = np.unique(size_class)
+    members = [np.flatnonzero(size_class == this) for this in classes]
+    grids = [_Grid(centre[m], reach[m], crowd_window) for m in members]   # one per class
     i, j = [], []
-    for index, this in enumerate(classes):
-        members = np.flatnonzero(size_class == this)
-        if len(members) > 1:
-            i_class, j_class = _grid_candidates(centre[members], reach[members], crowd_window)
-            i.append(members[i_class])
-            j.append(members[j_class])
-        for larger in classes[index + 1:]:
-            big = np.flatnonzero(size_class == larger)
-            i_small, j_big = _larger_candidates(centre[members], centre[big], reach[big],
-                                                crowd_window)
-            i.append(members[i_small])
+    for index, own in enumerate(members):
+        if len(own) > 1:
+            i_class, j_class = _grid_candidates(grids[index], centre[own], crowd_window)
+            i.append(own[i_class])
+            j.append(own[j_class])
+        for big, grid in zip(members[index + 1:], grids[index + 1:]):
+            i_small, j_big = _larger_candidates(centre[own], grid, crowd_window)
+            i.append(own[i_small])
             j.append(big[j_big])
     i, j = np.concatenate(i), np.concatenate(j)
     if counter is not None:
@@ -128,14 +127,13 @@ def size_classes(reach: np.ndarray) -> np.ndarray:
                     np.where(scale < -1, np.floor(scale) + 1, 0)).astype(np.int64)
 
 
-def _grid_candidates(centre, reach, crowd_window=None):
-    """Candidate pairs (i < j) from neighbouring cells of a grid of cell size 2 max(reach).
+def _grid_candidates(grid, centre, crowd_window=None):
+    """Candidate pairs (i < j) of the bodies at ``centre`` from neighbouring cells of their
+    `_Grid` (cell size 2 max(reach)).
 
     With ``crowd_window``, the bodies of crowded cells are paired only by `crowd_pairs`, and
     those of the cells around them both by it and by the grid (with each other).
     """
-    n = len(centre)
-    grid = _Grid(centre, reach, crowd_window)
     i_parts, j_parts = [], []
     count = grid.count
     if grid.crowded.any():
@@ -148,21 +146,21 @@ def _grid_candidates(centre, reach, crowd_window=None):
         i_parts.append(crowd[i_crowd])
         j_parts.append(crowd[j_crowd])
         count = np.where(grid.crowded, 0, count)       # the grid pairs only uncrowded cells
-    own = grid.lookup(grid.cell)
+    uncrowded = ~grid.crowded[grid.lookup(grid.cell)]     # each body's own cell
     for offset in _OFFSETS:
         slot = grid.lookup(grid.cell + offset)
-        i, j = grid.members(slot, np.where((slot >= 0) & ~grid.crowded[own], count[slot], 0))
+        i, j = grid.members(slot, np.where((slot >= 0) & uncrowded, count[slot], 0))
         keep = (i < j) if not offset.any() else (i != j)
         i_parts.append(np.minimum(i[keep], j[keep]))
         j_parts.append(np.maximum(i[keep], j[keep]))
     return np.concatenate(i_parts), np.concatenate(j_parts)
 
 
-def _larger_candidates(small_centre, centre, reach, crowd_window=None):
-    """Candidate pairs (i into small_centre, j into centre) between bodies of a smaller size class
-    and those of a larger one, from the 27 cells around each smaller body in the larger class's
-    grid. A pair that touches has |c_i - c_j| <= 2 max(reach), one cell, so none is missed."""
-    grid = _Grid(centre, reach, crowd_window)
+def _larger_candidates(small_centre, grid, crowd_window=None):
+    """Candidate pairs (i into small_centre, j into the larger class) between bodies of a
+    smaller size class and those of a larger one, from the 27 cells around each smaller body
+    in the larger class's `_Grid`. A pair that touches has |c_i - c_j| <= 2 max(reach), one
+    cell, so none is missed."""
     count = grid.count
     if crowd_window is not None:
         count = np.where(grid.crowded, np.minimum(count, crowd_window), count)

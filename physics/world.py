@@ -22,13 +22,14 @@ from physics.impulses import SolverBodies
 from physics.integrators import INTEGRATORS, integrate_velocities, parabola_start_velocity
 from physics.quaternions import rotate_orientations
 from physics.solvers import SOLVERS, contact_keys, separate_overlaps, warm_start
+from scene_model.bodies import MAX_DT, MIN_DT
 from scene_model.geometry import dot
 
 SPAWN_OFFSET = 1e-3     # a sphere spawned on another's centre is moved this many radii away
-# A step shorter than a microsecond needs a million steps per simulated second; one longer than
+# dt runs from MIN_DT to MAX_DT, the range the scene format declares (scene_model.bodies): a
+# step shorter than a microsecond needs a million steps per simulated second; one longer than
 # a tenth of a second skips through thin contacts (a ball falling from 1 m arrives at 4.4 m/s,
 # 0.44 m a step). Outside the range the run would be endless or meaningless.
-MIN_DT, MAX_DT = 1e-6, 0.1     # s; the same range as scene_model.bodies.PhysicsSettings.dt
 MAX_STEPS = 10 ** 9     # most steps one call may ask for: 1e9 steps are days of computing
 
 
