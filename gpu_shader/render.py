@@ -87,20 +87,27 @@ class Renderer:
                        progress=None) -> Frame:
         """Draw a program made for ``scene`` at this size: `generate`'s, or another with the
         same outputs (`gpu_shader.uber.uber_program`)."""
+        with self.ctx:           # make our context current: the process may hold others
+            fbo = self._draw_planes(generated, width, height, progress)
+            frame = self.read_frame(fbo, scene, width, height)
+        if not generated.path_labels:
+            frame.path = None
+        return frame
+
+    def draw_planes(self, generated: Program, width: int, height: int):
+        """Draw ``generated`` into `target` (width, height) and leave the planes there, read
+        back nothing: a live view shows them straight from the GPU (`gpu_shader.display`)."""
+        with self.ctx:
+            return self._draw_planes(generated, width, height, None)
+
+    def _draw_planes(self, generated: Program, width: int, height: int, progress):
         parameters = generated.parameters.astype(np.float32)
         if parameters.nbytes > self.max_block:
             raise MarchlabError(
                 f"the scene needs {parameters.nbytes} bytes of shader parameters; this OpenGL "
                 f"allows {self.max_block} in a uniform block (fewer objects or lights)")
-        with self.ctx:           # make our context current: the process may hold others
-            program, vao = self._program(generated.source, generated.vertex_source)
-            fbo = self.target(width, height)
-            frame = self._draw(scene, program, vao, fbo, parameters, width, height, progress)
-        if not generated.path_labels:
-            frame.path = None
-        return frame
-
-    def _draw(self, scene, program, vao, fbo, parameters, width, height, progress) -> Frame:
+        program, vao = self._program(generated.source, generated.vertex_source)
+        fbo = self.target(width, height)
         buffer = self.ctx.buffer(parameters.tobytes())
         try:
             buffer.bind_to_uniform_block(0)
@@ -108,13 +115,18 @@ class Renderer:
             fbo.use()
             fbo.viewport = (0, 0, width, height)
             self.draw(vao, width, height, progress)
-            floats = np.empty((2, height, width, 4), np.float32)
-            integers = np.empty((height, width, 4), np.int32)
-            for i in range(2):
-                fbo.read_into(floats[i], components=4, attachment=i, dtype="f4")
-            fbo.read_into(integers, components=4, attachment=2, dtype="i4")
         finally:
             buffer.release()
+        return fbo
+
+    def read_frame(self, fbo, scene: Scene, width: int, height: int) -> Frame:
+        """The `Frame` held by the planes of ``fbo`` (a `target` that ``scene`` was drawn
+        into at width x height)."""
+        floats = np.empty((2, height, width, 4), np.float32)
+        integers = np.empty((height, width, 4), np.int32)
+        for i in range(2):
+            fbo.read_into(floats[i], components=4, attachment=i, dtype="f4")
+        fbo.read_into(integers, components=4, attachment=2, dtype="i4")
         return frame_from_planes((*floats, integers), scene, "gpu", "float32")
 
     def draw(self, vao, width, height, progress):
