@@ -92,3 +92,49 @@ def camera_rays(camera: Camera, width: int, height: int, dtype=np.float64):
     directions = forward + sx[None, :, None] * right + sy[:, None, None] * up
     return np.asarray(camera.position, dtype=dtype), normalize(directions)
 
+
+
+def pixel_ray(camera: Camera, x: float, y: float, width: int, height: int):
+    """The ray through the point (``x``, ``y``) of the image, in pixels from its top-left
+    corner: pixel (i, j)'s centre is (i + 0.5, j + 0.5), where `camera_rays` aims. A viewer
+    asks for the ray under the mouse with it.
+
+    Returns
+    -------
+    origin, direction : (3,) float64 ndarrays
+        The camera position and the unit direction.
+    """
+    forward, right, up = camera_basis(camera)
+    half_height = math.tan(math.radians(camera.fov) / 2)
+    sx = (2 * x / width - 1) * half_height * width / height
+    sy = (1 - 2 * y / height) * half_height
+    return np.asarray(camera.position, np.float64), normalize(forward + sx * right + sy * up)
+
+
+def project(camera: Camera, points, width: int, height: int) -> np.ndarray:
+    """Where ``points`` appear in the image: the inverse of `pixel_ray`.
+
+    Parameters
+    ----------
+    points : (N, 3) array_like
+        World positions.
+
+    Returns
+    -------
+    (N, 3) float64 ndarray
+        x, y in pixels from the image's top-left corner, and the depth along the view
+        direction; x and y are nan for a point not in front of the camera (depth <= 0).
+    """
+    forward, right, up = camera_basis(camera)
+    offset = np.asarray(points, np.float64).reshape(-1, 3) - np.asarray(camera.position)
+    depth = offset @ forward
+    half_height = math.tan(math.radians(camera.fov) / 2)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        sx = (offset @ right) / depth
+        sy = (offset @ up) / depth
+    x = (sx / (half_height * width / height) + 1) * width / 2
+    y = (1 - sy / half_height) * height / 2
+    behind = ~(depth > 0)
+    x[behind] = np.nan
+    y[behind] = np.nan
+    return np.stack([x, y, depth], axis=-1)
