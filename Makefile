@@ -16,7 +16,8 @@ BIN := $(VENV)/bin
 # Mesa's EGL and software OpenGL (llvmpipe) for the headless GPU backend; Debian's PoCL
 # (with the ICD loader) for the OpenCL backend: the PoCL wheel from PyPI cannot build
 # kernels on some CPUs ("unknown target CPU 'generic'"), Debian's can.
-SYSTEM_PACKAGES := libegl1 libegl-mesa0 libgl1-mesa-dri pocl-opencl-icd ocl-icd-libopencl1
+# Xvfb, a display in memory, for the tests of the `marchlab view` window (pytest-xvfb starts it).
+SYSTEM_PACKAGES := libegl1 libegl-mesa0 libgl1-mesa-dri pocl-opencl-icd ocl-icd-libopencl1 xvfb
 
 .PHONY: demo test docs speed-vs-error system-packages clean
 
@@ -30,11 +31,15 @@ demo: $(VENV)/.installed
 # The backends named here must run: a test that would skip for one fails instead, naming it
 # (tests/required_backends.py). Without their drivers: make test MARCHLAB_REQUIRE_BACKENDS=
 MARCHLAB_REQUIRE_BACKENDS := gpu,opencl
+# The `marchlab view` window's tests (tests/view) must run too: imgui-bundle, and Xvfb started
+# by pytest-xvfb. Without a display: make test MARCHLAB_REQUIRE_VIEW=
+MARCHLAB_REQUIRE_VIEW := 1
 
 test: $(VENV)/.installed-test
 	@$(BIN)/marchlab doctor --brief
 	$(BIN)/lint-imports
-	MARCHLAB_REQUIRE_BACKENDS=$(MARCHLAB_REQUIRE_BACKENDS) $(BIN)/python -m pytest
+	MARCHLAB_REQUIRE_BACKENDS=$(MARCHLAB_REQUIRE_BACKENDS) MARCHLAB_REQUIRE_VIEW=$(MARCHLAB_REQUIRE_VIEW) \
+	  $(BIN)/python -m pytest
 
 # The test environment holds the docs extra and everything the lessons import, which the
 # site executes (sphinx-build -D nb_execution_mode=off skips that, as tests/test_docs_site.py does).

@@ -20,7 +20,7 @@ from scene_model.errors import MarchlabError
 from scene_model.frame import AOVS
 
 from .commands import (cmd_bench_accuracy, cmd_compare, cmd_render, cmd_scenes, cmd_shader,
-                       cmd_show, cmd_simulate, cmd_truth)
+                       cmd_show, cmd_simulate, cmd_truth, cmd_view)
 from .doctor import add_parser as add_doctor_parser
 from .render import BACKENDS, PRECISIONS
 
@@ -205,6 +205,21 @@ def build_parser() -> Parser:
     p.add_argument("--set", action="extend", nargs="+", default=[], metavar="FIELD=VALUE",
                    help="override scene fields, e.g. --set camera.fov=40")
     p.set_defaults(func=cmd_truth)
+
+    p = sub.add_parser("view", help="open a live window onto a scene: fly around it, edit it, "
+                                    "play its physics, check it against the reference")
+    p.add_argument("scene", help="bundled scene name (see `marchlab scenes`) or a .toml path")
+    p.add_argument("--size", type=parse_size, default=(960, 720), metavar="WxH",
+                   help="window size in pixels (default: 960x720)")
+    p.add_argument("--frames", type=integer_in(1, 100_000, "a whole number from 1 to 100000"),
+                   help="draw this many frames (after the --script), then close")
+    p.add_argument("--screenshot", metavar="PATH",
+                   help="with --frames: write the 3D view alone (no panels) at --size as PNG "
+                        "when the window closes")
+    p.add_argument("--script", metavar="FILE",
+                   help="replay the input actions of a TOML script, one per frame "
+                        "(docs/viewer.md)")
+    p.set_defaults(func=cmd_view)
 
     p = sub.add_parser("bench", help="measure the backends (see also benchmarks/)")
     bench = p.add_subparsers(dest="bench", required=True, parser_class=Parser)

@@ -336,3 +336,28 @@ def trajectory_csv(trajectory) -> bytes:
         path = Path(folder) / "trajectory.csv"
         trajectory.to_csv(path)
         return path.read_bytes()
+
+
+def cmd_view(args) -> int:
+    """``marchlab view``: a live window onto a scene (`marchlab.view`). With ``--frames N``
+    it draws N frames and exits, writing ``--screenshot`` (the 3D view alone) at the end."""
+    refuse_empty_paths(args, "--screenshot", "--script")
+    if args.screenshot is not None and Path(args.screenshot).suffix.lower() != ".png":
+        raise MarchlabError(f"--screenshot {args.screenshot}: a screenshot is a .png")
+    if args.screenshot is not None and args.frames is None:
+        raise MarchlabError("--screenshot is written when the window closes by itself: "
+                            "give --frames N too")
+    check_outputs(files=[args.screenshot])
+    from .view import Viewer
+    from .view_script import read_script
+    actions = read_script(args.script) if args.script else []
+    viewer = Viewer(args.scene, args.size)
+    from .view_window import Window, run, window_problem
+    problem = window_problem()
+    if problem:
+        raise MarchlabError(problem)
+    window = Window(viewer, frames=args.frames, screenshot=args.screenshot, actions=actions)
+    run(window, args.size, title=f"marchlab view {args.scene}")
+    if args.screenshot is not None:
+        print(f"wrote {args.screenshot}")
+    return 0

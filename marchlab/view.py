@@ -1,0 +1,414 @@
+"""The live view: what the ``marchlab view`` window shows and edits, without the window.
+
+`Viewer` holds the scene being edited (with its undo history), the camera, the render
+settings a person changes with sliders, the selection, the overlay, the physics playing, the
+resolution the view draws at and its frame times. The window (`marchlab.view_window`) draws
+it with ImGui and forwards the mouse and keys to it; a ``--script`` replays actions on it
+(`marchlab.view_script`); the tests drive it directly. Nothing here imports a GUI or OpenGL:
+drawing is `ViewDrawer`'s, which the window makes once it has a context.
+
+Drawing on demand. The view renders only when what it shows changes (the camera, the scene,
+a body, the size), so a still view costs nothing; while the camera moves it renders at
+`MOVING_SCALE` of the resolution, and at full resolution again `SETTLE_SECONDS` after the
+motion stops (the teacher's target, docs/viewer.md: 30 frames per second while orbiting,
+full resolution within 0.5 s of stopping).
+"""
+
+from __future__ import annotations
+
+import collections
+import dataclasses
+import math
+import os
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+
+from scene_model.camera import camera_basis, pixel_ray
+from scene_model.errors import MarchlabError, SceneError
+from scene_model.files import write_atomically
+from scene_model.scene import Scene, rendered_scene, scene_at
+from scene_model.scenefile import load_scene, scene_path, scene_to_toml
+from scene_model import editing
+
+from . import camera_control
+
+MOVING_SCALE = 0.35         # of each side, while the camera moves
+SETTLE_SECONDS = 0.25       # after the last motion, the view refines to full resolution
+OVERLAYS = ("color", "steps", "depth", "normal", "object_id")
+FRAME_HISTORY = 240         # frame times kept for the plot
+MIN_SCALE, MAX_SCALE = 0.1, 1.0
+
+
+@dataclasses.dataclass
+class CheckResult:
+    """The view checked against the reference (`Viewer.check_against_reference`)."""
+    reference: np.ndarray        # (H, W, 3) uint8, the NumPy reference's picture
+    gpu: np.ndarray              # (H, W, 3) uint8, the gpu backend's
+    difference: np.ndarray       # (H, W, 3) uint8, |a - b| amplified
+    failures: list[str]          # one line per gate failed; empty: every gate passes
+    rows: list[tuple[str, str]]  # the comparison's figures, as `marchlab compare` prints them
+    seconds: float
+
+
+class Viewer:
+    """The state of a live view of one scene.
+
+    Parameters
+    ----------
+    source : str or path
+        A bundled scene's name or a scene file (`scene_model.scenefile.load_scene`).
+    size : (int, int)
+        The view's size in pixels, width by height.
+    clock : callable, optional
+        Seconds, monotonic (default `time.perf_counter`); tests pass a fake one.
+    """
+
+    def __init__(self, source, size=(640, 480), clock=time.perf_counter):
+        self.clock = clock
+        self.size = tuple(int(s) for s in size)
+        self.overlay = "color"
+        self.selection: tuple | None = None
+        self.resolution_scale = 1.0
+        self.moving_scale = MOVING_SCALE
+        self.refine = True           # draw at reduced resolution while moving
+        self.frame_times = collections.deque(maxlen=FRAME_HISTORY)
+        self.status = ""
+        self.check: CheckResult | None = None
+        self.check_progress = None   # (done, total) while a check runs
+        self.probe = None
+        self._last_motion = -math.inf
+        self._held_keys: set[str] = set()
+        self.open(source)
+
+    # --- the scene -------------------------------------------------------------------------
+
+    def open(self, source) -> None:
+        """Show another scene file (or bundled scene); its camera is the start."""
+        scene = load_scene(source)
+        self.source = str(source)
+        self.path = scene_path(source)
+        self._mtime = _mtime(self.path)
+        self.history = editing.History(scene)
+        self.camera = scene.camera
+        self.selection = None
+        self.saved_scene = scene
+        self._reset_playback()
+        self.status = f"opened {self.source}"
+
+    @property
+    def scene(self) -> Scene:
+        """The edited scene, with the view's camera."""
+        return dataclasses.replace(self.history.scene, camera=self.camera)
+
+    @property
+    def modified(self) -> bool:
+        return self.scene != self.saved_scene
+
+    def edit(self, scene: Scene, label: str, coalesce=None) -> None:
+        """Make ``scene`` the edited scene, one undo step (``coalesce``: steps with the same
+        key in a row, as one slider drag makes, are one step). The view's camera is not
+        ``scene``'s: it moves with the mouse and with `set_field` ("camera.fov")."""
+        structure_changed = len(scene.bodies) != len(self.history.scene.bodies)
+        self.history.push(dataclasses.replace(scene, camera=self.history.scene.camera), label,
+                          coalesce=coalesce)
+        if structure_changed or scene.bodies != self._played_bodies:
+            self._reset_playback()
+
+    def set_field(self, path: str, value) -> bool:
+        """Set one field (``"render.epsilon"``, ``"materials.red.kd"``, ``"camera.fov"``) as
+        a drag or a typed number does; a value the scene refuses leaves it unchanged and says
+        why in `status`. Returns whether the scene changed."""
+        try:
+            scene = editing.set_field(self.scene, path, value)
+        except (SceneError, MarchlabError) as err:
+            self.status = f"not changed: {err}"
+            return False
+        if path.startswith("camera."):
+            self.camera = scene.camera
+            return True
+        if scene != self.scene:
+            self.edit(scene, f"set {path}", coalesce=path)
+        return True
+
+    def undo(self) -> None:
+        if self.history.can_undo:
+            self.history.undo()
+            self._after_history()
+
+    def redo(self) -> None:
+        if self.history.can_redo:
+            self.history.redo()
+            self._after_history()
+
+    def _after_history(self) -> None:
+        if self.selection is not None and not _exists(self.history.scene, self.selection):
+            self.selection = None
+        if self.history.scene.bodies != self._played_bodies:
+            self._reset_playback()
+
+    def save(self, path=None) -> Path:
+        """Write the scene, with the view's camera, as TOML (to its own file by default; a
+        bundled scene must be saved under a new name)."""
+        if path is None:
+            if _is_bundled(self.path):
+                raise MarchlabError(f"{self.source} is a bundled scene: save it under a new "
+                                    "name (File > Save as)")
+            path = self.path
+        path = Path(path)
+        if path.suffix.lower() != ".toml":
+            raise MarchlabError(f"{path}: a scene file must end in .toml")
+        scene = self.scene
+        write_atomically(path, scene_to_toml(scene).encode("utf-8"))
+        self.saved_scene = scene
+        if path.resolve() == self.path.resolve() or _is_bundled(self.path):
+            self.path, self.source = path, str(path)
+        self._mtime = _mtime(self.path)
+        self.status = f"saved {path}"
+        return path
+
+    def reload_if_changed(self) -> bool:
+        """Read the scene file again if it changed on disk since it was read or saved (an
+        undoable step; the camera stays where it is). A file that no longer reads leaves the
+        scene as it is and says why."""
+        mtime = _mtime(self.path)
+        if mtime == self._mtime or mtime is None:
+            return False
+        self._mtime = mtime
+        try:
+            scene = load_scene(self.path)
+        except SceneError as err:
+            self.status = f"not reloaded: {err}"
+            return False
+        self.history.push(scene, "reload from disk")
+        self.saved_scene = dataclasses.replace(scene, camera=self.camera)
+        self._after_history()
+        self._reset_playback()
+        self.status = f"reloaded {self.path.name}"
+        return True
+
+    # --- the objects ---------------------------------------------------------------------
+
+    def select(self, path) -> None:
+        self.selection = None if path is None else tuple(path)
+
+    def selected_ids(self) -> tuple[int, ...]:
+        """Object ids of the selected node's primitives (what the outline surrounds)."""
+        if self.selection is None:
+            return ()
+        return editing.primitive_ids(self.history.scene, self.selection)
+
+    def pick(self, object_id: int) -> None:
+        """Select the object a click hit (its object id; -1: nothing)."""
+        path = editing.object_path(self.history.scene, object_id) if object_id >= 0 else None
+        self.selection = path if isinstance(path, tuple) and path and path[0] != "body" else None
+
+    def add_object(self, kind: str) -> None:
+        """Add a new node of ``kind`` into the selected operator, or else at the top level."""
+        node = editing.default_node(kind)
+        try:
+            scene, path = editing.add_object(self.history.scene, node, self.selection)
+        except SceneError:
+            scene, path = editing.add_object(self.history.scene, node, None)
+        self.edit(scene, f"add {kind}")
+        self.selection = path
+
+    def duplicate_selected(self) -> None:
+        if self.selection is not None:
+            scene, path = editing.duplicate(self.history.scene, self.selection)
+            self.edit(scene, "duplicate")
+            self.selection = path
+
+    def delete_selected(self) -> None:
+        if self.selection is not None:
+            self.edit(editing.delete(self.history.scene, self.selection), "delete")
+            self.selection = None
+
+    def reparent_selected(self, parent) -> None:
+        if self.selection is not None:
+            try:
+                scene, path = editing.reparent(self.history.scene, self.selection, parent)
+            except SceneError as err:
+                self.status = f"not moved: {err}"
+                return
+            self.edit(scene, "re-parent")
+            self.selection = path
+
+    # --- the camera ------------------------------------------------------------------------
+
+    def drag(self, button: str, dx: float, dy: float) -> None:
+        """A mouse drag of (dx, dy) pixels on the view (`marchlab.camera_control`)."""
+        if dx or dy:
+            self.camera = camera_control.drag(self.camera, button, dx, dy, self.size[1])
+            self._moved()
+
+    def scroll(self, clicks: float) -> None:
+        if clicks:
+            self.camera = camera_control.scroll(self.camera, clicks)
+            self._moved()
+
+    def fly(self, keys, seconds: float, fast: bool = False) -> None:
+        camera = camera_control.fly_keys(self.camera, keys, seconds, fast)
+        if camera != self.camera:
+            self.camera = camera
+            self._moved()
+
+    def reset_camera(self) -> None:
+        self.camera = self.saved_scene.camera
+        self._moved()
+
+    def _moved(self) -> None:
+        self._last_motion = self.clock()
+
+    @property
+    def moving(self) -> bool:
+        return self.clock() - self._last_motion < SETTLE_SECONDS
+
+    def render_size(self) -> tuple[int, int]:
+        """The size the view renders at now: `resolution_scale` of the window, times
+        `moving_scale` while the camera moves."""
+        scale = min(max(self.resolution_scale, MIN_SCALE), MAX_SCALE)
+        if self.refine and self.moving:
+            scale *= self.moving_scale
+        return tuple(max(1, round(side * scale)) for side in self.size)
+
+    # --- physics -----------------------------------------------------------------------------
+
+    def _reset_playback(self) -> None:
+        scene = self.history.scene
+        self._played_bodies = scene.bodies
+        if scene.bodies:
+            from .playback import Playback
+            self.playback = Playback(scene)
+        else:
+            self.playback = None
+
+    def advance(self, seconds: float) -> None:
+        """One frame of ``seconds``: play the physics, fly with the keys held."""
+        if self.playback is not None:
+            self.playback.advance(seconds)
+        if self._held_keys:
+            self.fly(self._held_keys - {"SHIFT"}, seconds, fast="SHIFT" in self._held_keys)
+
+    def grab_ball(self, x: float, y: float) -> bool:
+        """Take hold of the body under view pixel (x, y), if any: while held it follows
+        `drag_ball` in the plane through its centre facing the camera, and is thrown with
+        the drag's velocity when released."""
+        if self.playback is None:
+            return False
+        origin, direction = pixel_ray(self.camera, x, y, *self.size)
+        index = self.playback.pick(origin, direction)
+        if index is None:
+            return False
+        self.playback.grab(index)
+        centre = self.playback.positions()[index]
+        forward = camera_basis(self.camera)[0]
+        self._grab_plane = (centre, forward)
+        return True
+
+    def drag_ball(self, x: float, y: float) -> None:
+        if self.playback is None or getattr(self, "_grab_plane", None) is None:
+            return
+        centre, normal = self._grab_plane
+        origin, direction = pixel_ray(self.camera, x, y, *self.size)
+        denominator = direction @ normal
+        if abs(denominator) > 1e-9:
+            t = ((centre - origin) @ normal) / denominator
+            if t > 0:
+                self.playback.drag_to(origin + t * direction)
+
+    def release_ball(self) -> None:
+        if self.playback is not None and getattr(self, "_grab_plane", None) is not None:
+            self.playback.release()
+        self._grab_plane = None
+
+    def hold_keys(self, keys) -> None:
+        self._held_keys = {k.upper() for k in keys}
+
+    # --- what is drawn -----------------------------------------------------------------------
+
+    def drawn_scene(self) -> Scene:
+        """The scene as the renderer draws it: the view's camera, the bodies where the
+        physics has them, the bodies turned into objects."""
+        scene = self.scene
+        if self.playback is not None:
+            scene = scene_at(scene, self.playback.positions())
+        return rendered_scene(scene)
+
+    def record_frame_time(self, seconds: float) -> None:
+        self.frame_times.append(seconds)
+
+    def fps(self) -> float:
+        """Frames per second over the frame times kept (0 before any)."""
+        if not self.frame_times:
+            return 0.0
+        return len(self.frame_times) / max(sum(self.frame_times), 1e-9)
+
+    # --- seeing the algorithm ----------------------------------------------------------------
+
+    def probe_pixel(self, x: int, y: int) -> None:
+        """March one pixel of the full-resolution view on the reference (`marchlab.probe`);
+        (x, y) in view pixels, row 0 at the top."""
+        from .probe import probe
+        width, height = self.size
+        self.probe = probe(self.scene_for_probe(), int(x), int(y), width, height)
+        self.probe_at = (int(x), int(y))
+
+    def scene_for_probe(self) -> Scene:
+        scene = self.scene
+        if self.playback is not None:
+            scene = scene_at(scene, self.playback.positions())
+        return scene
+
+    def check_against_reference(self, gpu_frame, background: bool = True):
+        """Render the view with the NumPy reference and compare ``gpu_frame`` (the gpu
+        backend's frame of the same view, with path labels) to it under the equivalence
+        gates; in a thread when ``background``, so the window keeps drawing. Sets `check`."""
+        scene = self.scene_for_probe()
+        height, width = gpu_frame.height, gpu_frame.width
+        self.check = None
+        self.check_progress = (0, width * height)
+
+        def work():
+            start = time.perf_counter()
+            from .compare import compare_frames, failures, gates_against
+            from .render import render
+            reference = render(scene, width, height, backend="numpy", path_labels=True,
+                               progress=lambda done, total: setattr(
+                                   self, "check_progress", (done, total)))
+            comparison = compare_frames(reference, gpu_frame, epsilon=scene.render.epsilon)
+            a, b = reference.image(), gpu_frame.image()
+            difference = np.clip(np.abs(a.astype(int) - b.astype(int)) * 32, 0, 255)
+            self.check = CheckResult(a, b, difference.astype(np.uint8),
+                                     failures(comparison, gates_against("float64")),
+                                     comparison.rows(), time.perf_counter() - start)
+            self.check_progress = None
+
+        if not background:
+            work()
+            return None
+        thread = threading.Thread(target=work, name="marchlab-check", daemon=True)
+        thread.start()
+        return thread
+
+
+def _mtime(path: Path):
+    try:
+        return os.stat(path).st_mtime_ns
+    except OSError:
+        return None
+
+
+def _is_bundled(path: Path) -> bool:
+    return path.parent.name == "scenes" and path.parent.parent.name == "scene_model"
+
+
+def _exists(scene: Scene, path) -> bool:
+    try:
+        editing.node_at(scene, path)
+    except (SceneError, IndexError, KeyError):
+        return False
+    return True
+

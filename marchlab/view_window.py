@@ -1,0 +1,826 @@
+"""The ``marchlab view`` window: imgui-bundle's runner, the gpu renderer behind the panels.
+
+imgui-bundle's runner (hello_imgui: GLFW and OpenGL 3) owns the window; moderngl attaches to
+its context in the start-up callback (`moderngl.create_context()`), the scene is drawn by the
+gpu backend's `Renderer` into its three planes and shown by the display pass
+(`gpu_shader.display`) as the window's background, and the panels are ImGui windows over it.
+The state is a `marchlab.view.Viewer`; this module draws it and forwards input to it.
+
+`ViewDrawer` is the GL half (no ImGui), so it can be checked on a headless context too.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+import typing
+from pathlib import Path
+
+import numpy as np
+
+from scene_model.errors import MarchlabError, SceneError
+from scene_model.fields import Record, color_range, field_types
+from scene_model.files import write_atomically
+from scene_model.shapes import Node, children, node_kinds
+from scene_model import editing
+
+from .view import OVERLAYS, Viewer
+
+DIFFERENCE_GAIN = 32
+
+
+class ViewDrawer:
+    """Draws a `Viewer`'s scene with the gpu backend on ``ctx`` and shows it.
+
+    The view renders only when what it shows changed, on the thread that owns the context.
+    """
+
+    def __init__(self, ctx):
+        from gpu_shader.display import Display
+        from gpu_shader.render import Renderer
+        self.ctx = ctx
+        self.renderer = Renderer(ctx)
+        self.display = Display(ctx)
+        self.drawn = None                 # (scene, size) of the picture in `target`
+        self.target = None
+        self.depth = (0.0, 1.0)
+        self.renders = 0                  # frames rendered (not just shown)
+        self.render_seconds = 0.0         # of the last one, CPU side
+
+    def update(self, viewer: Viewer, wait: bool = False) -> bool:
+        """Render the view again if what it shows changed; whether a new picture is drawn.
+
+        The program is generated here, on the GL thread (a few milliseconds; a program seen
+        before comes from the renderer's cache, so moving the camera or a body compiles
+        nothing). A structural edit compiles a new program in this frame: on llvmpipe that
+        holds the frame for 10-50 ms (docs/viewer.md). ``wait`` is accepted for callers that
+        need the picture drawn now (a screenshot); drawing is always immediate.
+        """
+        scene, size = viewer.drawn_scene(), viewer.render_size()
+        if self.drawn is not None and self.drawn == (scene, size):
+            return False
+        try:
+            program = self._generate(scene, size)
+        except MarchlabError as err:
+            viewer.status = f"cannot draw: {err}"
+            self.drawn = (scene, size)
+            return False
+        self._draw(scene, size, program, viewer)
+        return True
+
+    def _generate(self, scene, size):
+        from gpu_shader.generate import generate
+        return generate(scene, *size, flat_rows=self.renderer.flat_rows)
+
+    def _draw(self, scene, size, program, viewer: Viewer) -> None:
+        start = time.perf_counter()
+        try:
+            self.target = self.renderer.draw_planes(program, *size)
+        except MarchlabError as err:
+            viewer.status = f"cannot draw: {err}"
+        self.drawn = (scene, size)
+        self.renders += 1
+        if viewer.overlay == "depth" and self.target is not None:
+            self.depth = self.display.read_depth_range(self.target)
+        self.render_seconds = time.perf_counter() - start
+
+    def show(self, viewer: Viewer, viewport) -> None:
+        """Draw the picture into the bound framebuffer's ``viewport`` (x, y, w, h)."""
+        if self.target is None:
+            return
+        scene = viewer.history.scene
+        self.display.draw(self.target, viewer.overlay, gamma=scene.render.gamma,
+                          max_steps=scene.render.max_steps, depth_range=self.depth,
+                          selected=viewer.selected_ids(), viewport=viewport)
+
+    def image(self, viewer: Viewer, outline: bool = False) -> np.ndarray:
+        """The view at full resolution as an (H, W, 3) uint8 picture (no panels), drawn now
+        if the view shows a reduced one, read back and encoded as `marchlab render` encodes
+        a frame (`gpu_shader.display.overlay_image`); ``outline``: with the selection's."""
+        from gpu_shader.display import overlay_image
+        refine, viewer.refine = viewer.refine, False
+        try:
+            self.update(viewer, wait=True)
+        finally:
+            viewer.refine = refine
+        scene, (width, height) = self.drawn
+        with self.ctx:
+            frame = self.renderer.read_frame(self.target, scene, width, height)
+        return overlay_image(frame, viewer.overlay, viewer.selected_ids() if outline else ())
+
+    def shown_image(self, viewer: Viewer) -> np.ndarray:
+        """The picture shown now (at the resolution it was drawn at), read back: a frame of
+        a recording."""
+        from gpu_shader.display import overlay_image
+        scene, (width, height) = self.drawn
+        with self.ctx:
+            frame = self.renderer.read_frame(self.target, scene, width, height)
+        return overlay_image(frame, viewer.overlay, viewer.selected_ids())
+
+    def screenshot(self, viewer: Viewer, path) -> Path:
+        """Write the 3D view alone, at full resolution, to a PNG."""
+        from PIL import Image
+        import io
+        buffer = io.BytesIO()
+        Image.fromarray(self.image(viewer)).save(buffer, format="PNG")
+        write_atomically(path, buffer.getvalue())
+        viewer.status = f"saved {path}"
+        return Path(path)
+
+    def object_id_at(self, viewer: Viewer, x: float, y: float) -> int:
+        """The object id under view pixel (x, y) (-1: a miss), from the drawn picture."""
+        if self.target is None:
+            return -1
+        width, height = self.drawn[1]
+        i = min(max(int(x * width / viewer.size[0]), 0), width - 1)
+        j = min(max(int(y * height / viewer.size[1]), 0), height - 1)
+        with self.ctx:
+            data = self.target.read(viewport=(i, j, 1, 1), components=4, attachment=2,
+                                    dtype="i4")
+        return int(np.frombuffer(data, np.int32)[1])
+
+    def frame(self, viewer: Viewer):
+        """The gpu backend's `Frame` of the view at full resolution, with path labels (for
+        the check against the reference)."""
+        return self.renderer.render(viewer.drawn_scene(), *viewer.size, path_labels=True)
+
+
+class Recorder:
+    """Frames of the view written to an MP4 or GIF (imageio) as they are shown."""
+
+    def __init__(self, path, fps: float = 30.0):
+        import imageio.v3 as iio
+        self.path = Path(path)
+        if self.path.suffix.lower() not in (".mp4", ".gif"):
+            raise MarchlabError(f"{path}: a recording is an .mp4 or a .gif")
+        self.frames: list[np.ndarray] = []
+        self.fps = fps
+        self._iio = iio
+
+    def add(self, image: np.ndarray) -> None:
+        if self.frames and image.shape != self.frames[0].shape:
+            scale = np.asarray(self.frames[0].shape[:2]) // np.asarray(image.shape[:2])
+            image = np.repeat(np.repeat(image, scale[0], 0), scale[1], 1)
+            image = _fit(image, self.frames[0].shape)
+        self.frames.append(image)
+
+    def finish(self) -> Path:
+        if not self.frames:
+            raise MarchlabError("nothing was recorded")
+        import io
+        buffer = io.BytesIO()
+        extension = self.path.suffix.lower()
+        options = {"fps": self.fps} if extension == ".mp4" else {"duration": 1000 / self.fps,
+                                                                 "loop": 0}
+        self._iio.imwrite(buffer, np.stack(self.frames), extension=extension, **options)
+        write_atomically(self.path, buffer.getvalue())
+        return self.path
+
+
+def _fit(image, shape):
+    out = np.zeros(shape, np.uint8)
+    h, w = min(shape[0], image.shape[0]), min(shape[1], image.shape[1])
+    out[:h, :w] = image[:h, :w]
+    return out
+
+
+# --- the window ---------------------------------------------------------------------------
+
+class Window:
+    """The ImGui half: panels, input, the run loop's callbacks."""
+
+    def __init__(self, viewer: Viewer, frames: int | None = None, screenshot=None,
+                 actions=(), panels: bool = True):
+        self.viewer = viewer
+        self.frames_left = frames
+        self.screenshot_path = screenshot
+        self.actions = list(actions)
+        self.panels = panels
+        self.drawer: ViewDrawer | None = None
+        self.error: BaseException | None = None
+        self.frame_count = 0
+        self.last_time = None
+        self.recorder: Recorder | None = None
+        self.record_path = "view.mp4"
+        self.screenshot_name = "view.png"
+        self.save_as_name = "edited.toml"
+        self.open_name = ""
+        self.add_kind = "sphere"
+        self.textures = {}
+        self._mouse_on_ball = False
+        self.requests = []           # callables to run on the GL thread (`on_gl_thread`)
+
+    def on_gl_thread(self, function) -> None:
+        """Run ``function`` in the next frame, on the thread that holds the GL context: the
+        test engine runs its tests on a thread of their own, where GL calls draw nothing."""
+        self.requests.append(function)
+
+    # The runner's callbacks -------------------------------------------------------------
+
+    def post_init(self) -> None:
+        import moderngl
+        try:
+            ctx = moderngl.create_context()
+            if ctx.version_code < 330:
+                raise MarchlabError(f"OpenGL {ctx.version_code / 100:.1f}: the view needs 3.3")
+            self.drawer = ViewDrawer(ctx)
+        except BaseException as err:     # reported after the loop, which must end cleanly
+            self._fail(err)
+
+    def background(self) -> None:
+        if self.drawer is None:
+            return
+        from imgui_bundle import imgui
+        try:
+            now = time.perf_counter()
+            if self.last_time is not None:
+                seconds = now - self.last_time
+                self.viewer.record_frame_time(seconds)
+                self.viewer.advance(min(seconds, 0.1))
+            self.last_time = now
+            if self.frame_count % 30 == 0:
+                self.viewer.reload_if_changed()
+            while self.requests:
+                self.requests.pop(0)()
+            if self.actions:
+                from .view_script import perform
+                perform(self.actions.pop(0), self.viewer, _Gl(self))
+            io = imgui.get_io()
+            width, height = (int(v) for v in io.display_size)
+            scale = io.display_framebuffer_scale
+            if width > 0 and height > 0:
+                self.viewer.size = (width, height)
+            self.drawer.update(self.viewer)
+            ctx = self.drawer.ctx
+            screen = ctx.detect_framebuffer(0)      # the window's own, not the last bound
+            screen.use()
+            ctx.clear(0.0, 0.0, 0.0)
+            self.drawer.show(self.viewer, (0, 0, int(width * scale.x), int(height * scale.y)))
+            if self.recorder is not None:
+                self.recorder.add(self.drawer.shown_image(self.viewer))
+            self.frame_count += 1
+            if self.frames_left is not None and self.frame_count >= self.frames_left \
+                    and not self.actions:
+                self._finish()
+        except BaseException as err:
+            self._fail(err)
+
+    def gui(self) -> None:
+        if self.drawer is None:
+            return
+        try:
+            self._input()
+            if self.panels:
+                self._panels()
+                self._markers()
+        except BaseException as err:
+            self._fail(err)
+
+    def _finish(self) -> None:
+        from imgui_bundle import hello_imgui
+        if self.screenshot_path is not None:
+            self.drawer.screenshot(self.viewer, self.screenshot_path)
+        hello_imgui.get_runner_params().app_shall_exit = True
+
+    def _fail(self, err: BaseException) -> None:
+        from imgui_bundle import hello_imgui
+        if self.error is None:
+            self.error = err
+        hello_imgui.get_runner_params().app_shall_exit = True
+
+    # Input --------------------------------------------------------------------------------
+
+    def _input(self) -> None:
+        from imgui_bundle import imgui
+        io = imgui.get_io()
+        viewer = self.viewer
+        if not io.want_capture_mouse:
+            x, y = io.mouse_pos.x, io.mouse_pos.y
+            if imgui.is_mouse_clicked(imgui.MouseButton_.left):
+                self._press = (x, y)
+                self._mouse_on_ball = viewer.grab_ball(x, y)
+            for button, name in ((imgui.MouseButton_.left, "left"),
+                                 (imgui.MouseButton_.right, "right"),
+                                 (imgui.MouseButton_.middle, "middle")):
+                if imgui.is_mouse_dragging(button, 1.0):
+                    if name == "left" and self._mouse_on_ball:
+                        viewer.drag_ball(x, y)
+                    else:
+                        viewer.drag(name, io.mouse_delta.x, io.mouse_delta.y)
+            if imgui.is_mouse_released(imgui.MouseButton_.left):
+                if self._mouse_on_ball:
+                    viewer.release_ball()
+                    self._mouse_on_ball = False
+                elif imgui.get_mouse_drag_delta(imgui.MouseButton_.left, 0.0).x ** 2 + \
+                        imgui.get_mouse_drag_delta(imgui.MouseButton_.left, 0.0).y ** 2 < 4:
+                    self._click(x, y)
+            if io.mouse_wheel:
+                viewer.scroll(io.mouse_wheel)
+        held = set()
+        if not io.want_capture_keyboard:
+            for key in "WASDQE":
+                if imgui.is_key_down(getattr(imgui.Key, key.lower())):
+                    held.add(key)
+            if held and io.key_shift:
+                held.add("SHIFT")
+            if io.key_ctrl and imgui.is_key_pressed(imgui.Key.z):
+                viewer.redo() if io.key_shift else viewer.undo()
+            if io.key_ctrl and imgui.is_key_pressed(imgui.Key.s):
+                self._save()
+            if imgui.is_key_pressed(imgui.Key.space) and viewer.playback is not None:
+                playback = viewer.playback
+                playback.pause() if playback.playing else playback.play()
+            if imgui.is_key_pressed(imgui.Key.delete):
+                viewer.delete_selected()
+        viewer.hold_keys(held)
+
+    def _click(self, x, y) -> None:
+        viewer = self.viewer
+        if getattr(self, "probe_mode", False):
+            try:
+                viewer.probe_pixel(int(x), int(y))
+            except MarchlabError as err:
+                viewer.status = f"probe: {err}"
+            return
+        viewer.pick(self.drawer.object_id_at(viewer, x, y))
+
+    def _save(self, path=None) -> None:
+        try:
+            self.viewer.save(path)
+        except (MarchlabError, OSError) as err:
+            self.viewer.status = f"not saved: {err}"
+
+    # Panels --------------------------------------------------------------------------------
+
+    def _panels(self) -> None:
+        from imgui_bundle import imgui
+        self._menu()
+        imgui.set_next_window_pos((10, 30), imgui.Cond_.first_use_ever)
+        imgui.set_next_window_size((330, 460), imgui.Cond_.first_use_ever)
+        if imgui.begin("Scene")[0]:
+            self._scene_panel()
+        imgui.end()
+        right = self.viewer.size[0] - 320
+        imgui.set_next_window_pos((right, 30), imgui.Cond_.first_use_ever)
+        imgui.set_next_window_size((310, 420), imgui.Cond_.first_use_ever)
+        if imgui.begin("Render")[0]:
+            self._render_panel()
+        imgui.end()
+        if self.viewer.playback is not None:
+            imgui.set_next_window_pos((right, 460), imgui.Cond_.first_use_ever)
+            imgui.set_next_window_size((310, 260), imgui.Cond_.first_use_ever)
+            if imgui.begin("Physics")[0]:
+                self._physics_panel()
+            imgui.end()
+        imgui.set_next_window_pos((10, 500), imgui.Cond_.first_use_ever)
+        imgui.set_next_window_size((330, 170), imgui.Cond_.first_use_ever)
+        if imgui.begin("Performance")[0]:
+            self._performance_panel()
+        imgui.end()
+        if self.viewer.probe is not None:
+            if imgui.begin("Probe")[0]:
+                self._probe_panel()
+            imgui.end()
+        if self.viewer.check is not None or self.viewer.check_progress is not None:
+            if imgui.begin("Check against the reference")[0]:
+                self._check_panel()
+            imgui.end()
+
+    def _menu(self) -> None:
+        from imgui_bundle import imgui
+        viewer = self.viewer
+        if not imgui.begin_main_menu_bar():
+            return
+        if imgui.begin_menu("File"):
+            if imgui.menu_item("Save", "Ctrl+S", False)[0]:
+                self._save()
+            _, self.save_as_name = imgui.input_text("##save as", self.save_as_name)
+            imgui.same_line()
+            if imgui.button("Save as"):
+                self._save(self.save_as_name)
+            _, self.open_name = imgui.input_text("##open", self.open_name)
+            imgui.same_line()
+            if imgui.button("Open"):
+                try:
+                    viewer.open(self.open_name)
+                except MarchlabError as err:
+                    viewer.status = f"not opened: {err}"
+            _, self.screenshot_name = imgui.input_text("##screenshot", self.screenshot_name)
+            imgui.same_line()
+            if imgui.button("Screenshot"):
+                try:
+                    self.drawer.screenshot(viewer, self.screenshot_name)
+                except (MarchlabError, OSError) as err:
+                    viewer.status = f"no screenshot: {err}"
+            _, self.record_path = imgui.input_text("##record", self.record_path)
+            imgui.same_line()
+            if self.recorder is None:
+                if imgui.button("Record"):
+                    try:
+                        self.recorder = Recorder(self.record_path)
+                    except (MarchlabError, ImportError) as err:
+                        viewer.status = f"cannot record: {err}"
+            elif imgui.button(f"Stop ({len(self.recorder.frames)} frames)"):
+                try:
+                    viewer.status = f"saved {self.recorder.finish()}"
+                except (MarchlabError, OSError) as err:
+                    viewer.status = f"not saved: {err}"
+                self.recorder = None
+            imgui.end_menu()
+        if imgui.begin_menu("Edit"):
+            if imgui.menu_item("Undo", "Ctrl+Z", False, viewer.history.can_undo)[0]:
+                viewer.undo()
+            if imgui.menu_item("Redo", "Ctrl+Shift+Z", False, viewer.history.can_redo)[0]:
+                viewer.redo()
+            imgui.end_menu()
+        mark = " (modified)" if viewer.modified else ""
+        imgui.text_disabled(f"  {viewer.source}{mark}   {viewer.status}")
+        imgui.end_main_menu_bar()
+
+    def _scene_panel(self) -> None:
+        from imgui_bundle import imgui
+        viewer = self.viewer
+        scene = viewer.history.scene
+        # The object tools sit above the tabs, where the test engine finds them by label.
+        kinds = list(node_kinds())
+        imgui.set_next_item_width(110)
+        changed, index = imgui.combo("new", kinds.index(self.add_kind), kinds)
+        self.add_kind = kinds[index]
+        imgui.same_line()
+        if imgui.button("Add"):
+            self._guarded(viewer.add_object, self.add_kind)
+        imgui.same_line()
+        if imgui.button("Duplicate") and viewer.selection:
+            self._guarded(viewer.duplicate_selected)
+        imgui.same_line()
+        if imgui.button("Delete") and viewer.selection:
+            self._guarded(viewer.delete_selected)
+        if imgui.begin_tab_bar("scene tabs"):
+            if imgui.begin_tab_item("Objects")[0]:
+                for i, node in enumerate(scene.objects):
+                    self._tree(node, (i,))
+                if viewer.selection is not None:
+                    imgui.separator()
+                    self._node_editor(viewer.selection)
+                imgui.end_tab_item()
+            if imgui.begin_tab_item("Materials")[0]:
+                if imgui.button("Add material"):
+                    new, name = editing.add_material(scene)
+                    viewer.edit(new, f"add material {name}")
+                for name, material in scene.materials.items():
+                    if imgui.tree_node(f"{name}##material"):
+                        self._record(material, f"materials.{name}")
+                        imgui.tree_pop()
+                imgui.end_tab_item()
+            if imgui.begin_tab_item("Lights")[0]:
+                for kind in ("point", "directional", "spot"):
+                    if imgui.button(f"Add {kind}"):
+                        new, _ = editing.add_light(scene, kind)
+                        viewer.edit(new, f"add {kind} light")
+                    imgui.same_line()
+                imgui.new_line()
+                for i, light in enumerate(scene.lights):
+                    opened = imgui.tree_node(f"{i}: {light.kind}##light{i}")
+                    imgui.same_line()
+                    if imgui.small_button(f"delete##light{i}"):
+                        viewer.edit(editing.delete_light(scene, i), f"delete light {i}")
+                        if opened:
+                            imgui.tree_pop()
+                        break
+                    if opened:
+                        self._record(light, f"lights.{i}")
+                        imgui.tree_pop()
+                imgui.end_tab_item()
+            if imgui.begin_tab_item("Camera")[0]:
+                self._record(viewer.camera, "camera")
+                if imgui.button("Reset camera"):
+                    viewer.reset_camera()
+                imgui.end_tab_item()
+            imgui.end_tab_bar()
+
+    def _guarded(self, function, *args) -> None:
+        try:
+            function(*args)
+        except (SceneError, MarchlabError) as err:
+            self.viewer.status = f"not done: {err}"
+
+    def _tree(self, node: Node, path: tuple) -> None:
+        from imgui_bundle import imgui
+        kids = children(node)
+        flags = imgui.TreeNodeFlags_.open_on_arrow | imgui.TreeNodeFlags_.default_open
+        if not kids:
+            flags |= imgui.TreeNodeFlags_.leaf
+        if self.viewer.selection == path:
+            flags |= imgui.TreeNodeFlags_.selected
+        label = node.kind + (f" ({node.material})" if hasattr(node, "material") else "")
+        opened = imgui.tree_node_ex(f"{label}##{path}", flags)
+        if imgui.is_item_clicked():
+            self.viewer.select(path)
+        if imgui.begin_drag_drop_source():
+            imgui.set_drag_drop_payload_py_id("node", hash(path) & 0x7FFFFFFF)
+            self._dragged = path
+            imgui.text(label)
+            imgui.end_drag_drop_source()
+        if imgui.begin_drag_drop_target():
+            if imgui.accept_drag_drop_payload_py_id("node") is not None \
+                    and getattr(self, "_dragged", None) is not None:
+                self.viewer.select(self._dragged)
+                self.viewer.reparent_selected(path)
+                self._dragged = None
+            imgui.end_drag_drop_target()
+        if opened:
+            for j, child in enumerate(kids):
+                self._tree(child, path + (j,))
+            imgui.tree_pop()
+
+    def _node_editor(self, path) -> None:
+        from imgui_bundle import imgui
+        viewer = self.viewer
+        node = editing.node_at(viewer.history.scene, path)
+        imgui.text(f"{node.kind} at {list(path)}")
+        if len(path) > 1 and imgui.button("Move to the top level"):
+            viewer.reparent_selected(None)
+            return
+        imgui.text_disabled("drag a node onto an operator to move it there")
+        for name, value in _editable(node):
+            new = self._field(name, value, type(node), f"node{path}",
+                              materials=list(viewer.history.scene.materials))
+            if new is not _UNCHANGED:
+                try:
+                    replaced = editing.replace_node(viewer.history.scene, path,
+                                                    dataclasses.replace(node, **{name: new}))
+                except (SceneError, MarchlabError) as err:
+                    viewer.status = f"not changed: {err}"
+                else:
+                    viewer.edit(replaced, f"edit {node.kind}.{name}", coalesce=(path, name))
+
+    def _record(self, record: Record, prefix: str) -> None:
+        """An editor for every field of ``record``; a change goes through `Viewer.set_field`
+        (validated: a refused value leaves the scene as it is and says why)."""
+        from imgui_bundle import imgui
+        for name, value in _editable(record):
+            if isinstance(value, Record):
+                if imgui.tree_node(f"{name}##{prefix}"):
+                    self._record(value, f"{prefix}.{name}")
+                    imgui.tree_pop()
+                continue
+            new = self._field(name, value, type(record), prefix,
+                              materials=list(self.viewer.history.scene.materials))
+            if new is not _UNCHANGED:
+                self.viewer.set_field(f"{prefix}.{name}", new)
+
+    def _field(self, name, value, owner, prefix, materials=()):
+        from imgui_bundle import imgui
+        label = f"{name}##{prefix}"
+        hint = field_types(owner).get(name)
+        choices = _literal_choices(hint)
+        field = {f.name: f for f in dataclasses.fields(owner)}.get(name)
+        check = field.metadata.get("check") if field is not None else None
+        if choices:
+            changed, index = imgui.combo(label, choices.index(value), choices)
+            return choices[index] if changed else _UNCHANGED
+        if name == "material" and isinstance(value, str):
+            names = list(materials)
+            changed, index = imgui.combo(label, names.index(value) if value in names else 0,
+                                         names)
+            return names[index] if changed else _UNCHANGED
+        if isinstance(value, bool):
+            changed, new = imgui.checkbox(label, value)
+        elif isinstance(value, int):
+            changed, new = imgui.drag_int(label, value, max(1.0, abs(value) * 0.01))
+        elif isinstance(value, float):
+            speed = max(abs(value) * 0.01, 1e-4)
+            changed, new = imgui.drag_float(label, value, speed, format="%.6g")
+        elif isinstance(value, tuple) and len(value) == 3 and all(
+                isinstance(v, float) for v in value):
+            if check is color_range:
+                changed, new = imgui.color_edit3(label, list(value))
+            else:
+                speed = max(max(abs(v) for v in value) * 0.01, 1e-3)
+                changed, new = imgui.drag_float3(label, list(value), speed, format="%.4g")
+            new = tuple(float(v) for v in new)
+        elif isinstance(value, str):
+            changed, new = imgui.input_text(label, value)
+        else:
+            return _UNCHANGED
+        return new if changed else _UNCHANGED
+
+    def _render_panel(self) -> None:
+        from imgui_bundle import imgui
+        viewer = self.viewer
+        changed, index = imgui.combo("overlay", OVERLAYS.index(viewer.overlay), list(OVERLAYS))
+        if changed:
+            viewer.overlay = OVERLAYS[index]
+            self.drawer.drawn = None      # the depth overlay reads its range when drawn
+        _, self.probe_mode = imgui.checkbox("probe a pixel on click",
+                                            getattr(self, "probe_mode", False))
+        if imgui.button("Check against the reference") and viewer.check_progress is None:
+            viewer.check_against_reference(self.drawer.frame(viewer))
+        imgui.separator()
+        self._record(viewer.history.scene.render, "render")
+        if viewer.history.scene.physics is not None and imgui.tree_node("physics settings"):
+            self._record(viewer.history.scene.physics, "physics")
+            imgui.tree_pop()
+
+    def _physics_panel(self) -> None:
+        from imgui_bundle import imgui, implot
+        playback = self.viewer.playback
+        if imgui.button("Pause" if playback.playing else "Play"):
+            playback.pause() if playback.playing else playback.play()
+        imgui.same_line()
+        if imgui.button("Step"):
+            playback.step()
+        imgui.same_line()
+        if imgui.button("Reset"):
+            playback.reset()
+        imgui.same_line()
+        if imgui.button("Kick"):
+            playback.kick(1.0, seed=playback.steps)
+        imgui.text(f"t = {playback.time:.3f} s, {playback.steps} steps")
+        changed, scale = imgui.slider_float("time scale", playback.time_scale, 0.1, 4.0)
+        if changed:
+            playback.time_scale = scale
+        settings = playback.settings
+        changed, gravity = imgui.drag_float3("gravity (m/s^2)", list(settings.gravity), 0.05)
+        if changed:
+            self._guarded(playback.set_gravity, tuple(gravity))
+        for name, setter in (("restitution", playback.set_restitution),
+                             ("friction", playback.set_friction)):
+            changed, value = imgui.slider_float(name, getattr(settings, name), 0.0, 1.0)
+            if changed:
+                self._guarded(setter, value)
+        history = np.asarray(playback.history, np.float64)
+        if len(history) > 1 and implot.begin_plot("energy and momentum", (-1, 120)):
+            implot.plot_line("energy (J)", history[:, 0].copy(), history[:, 1].copy())
+            implot.plot_line("|momentum| (kg m/s)", history[:, 0].copy(), history[:, 2].copy())
+            implot.end_plot()
+
+    def _performance_panel(self) -> None:
+        from imgui_bundle import imgui, implot
+        viewer = self.viewer
+        size = viewer.render_size()
+        imgui.text(f"{viewer.fps():5.1f} fps, drawing {size[0]}x{size[1]}"
+                   f"{' (moving)' if viewer.moving else ''}, "
+                   f"{self.drawer.renders} renders")
+        _, viewer.resolution_scale = imgui.slider_float("resolution", viewer.resolution_scale,
+                                                        0.1, 1.0)
+        _, viewer.refine = imgui.checkbox("reduced resolution while moving", viewer.refine)
+        times = np.asarray(viewer.frame_times, np.float64) * 1e3
+        if len(times) > 1 and implot.begin_plot("frame time (ms)", (-1, 90)):
+            implot.plot_line("ms", times)
+            implot.end_plot()
+
+    def _probe_panel(self) -> None:
+        from imgui_bundle import imgui, implot
+        probe = self.viewer.probe
+        imgui.text(f"pixel {self.viewer.probe_at}: {probe.steps} steps, depth {probe.depth:.5g}")
+        t = np.asarray(probe.t, np.float64)
+        distance = np.asarray(probe.distance, np.float64)
+        if len(t) and implot.begin_plot("march", (-1, 200)):
+            steps = np.arange(len(t), dtype=np.float64)
+            implot.plot_line("t", steps, t)
+            implot.plot_line("distance", steps, distance)
+            implot.end_plot()
+
+    def _check_panel(self) -> None:
+        from imgui_bundle import imgui
+        viewer = self.viewer
+        if viewer.check_progress is not None:
+            done, total = viewer.check_progress
+            imgui.progress_bar(done / max(total, 1), (-1, 0), "NumPy reference rendering")
+            return
+        check = viewer.check
+        verdict = "every gate passes" if not check.failures else "FAILS: " + "; ".join(
+            check.failures)
+        imgui.text_wrapped(f"{verdict} ({check.seconds:.1f} s)")
+        size = (check.reference.shape[1] / 2, check.reference.shape[0] / 2)
+        for name in ("reference", "gpu", "difference"):
+            texture = self._texture(name, getattr(check, name))
+            imgui.begin_group()
+            imgui.text(name if name != "difference" else f"difference x{DIFFERENCE_GAIN}")
+            imgui.image(imgui.ImTextureRef(texture.glo), size)
+            imgui.end_group()
+            imgui.same_line()
+        imgui.new_line()
+        if imgui.tree_node("figures"):
+            for name, value in check.rows:
+                imgui.text(f"{name:24s} {value}")
+            imgui.tree_pop()
+
+    def _texture(self, name, image):
+        key = (name, id(image))
+        if self.textures.get(name, (None,))[0] != key:
+            ctx = self.drawer.ctx
+            texture = ctx.texture((image.shape[1], image.shape[0]), 3,
+                                  np.ascontiguousarray(image).tobytes())
+            self.textures[name] = (key, texture)
+        return self.textures[name][1]
+
+    def _markers(self) -> None:
+        """Each light as a small marker where it is (directional lights at the edge of the
+        view, toward where they shine from), and each body's index when grabbed."""
+        from imgui_bundle import imgui
+        from scene_model.camera import project
+        viewer = self.viewer
+        draw = imgui.get_background_draw_list()
+        width, height = viewer.size
+        for i, light in enumerate(viewer.history.scene.lights):
+            position = getattr(light, "position", None)
+            if position is None:
+                direction = np.asarray(getattr(light, "direction", (0, -1, 0)), np.float64)
+                position = np.asarray(viewer.camera.look_at) - 1e3 * direction
+            x, y, depth = project(viewer.camera, [position], width, height)[0]
+            if not math.isfinite(x):
+                continue
+            x, y = min(max(x, 8), width - 8), min(max(y, 28), height - 8)
+            colour = imgui.get_color_u32((1.0, 0.9, 0.2, 1.0))
+            draw.add_circle_filled((x, y), 6, colour)
+            draw.add_text((x + 8, y - 8), colour, f"{light.kind} {i}")
+
+
+class _Gl:
+    """What a script action asks of the GPU, answered by a window's drawer."""
+
+    def __init__(self, window: Window):
+        self.window = window
+
+    def object_id_at(self, x, y) -> int:
+        self.window.drawer.update(self.window.viewer, wait=True)
+        return self.window.drawer.object_id_at(self.window.viewer, x, y)
+
+    def screenshot(self, path) -> None:
+        self.window.drawer.screenshot(self.window.viewer, path)
+
+
+_UNCHANGED = object()
+
+
+def _editable(record) -> list[tuple[str, object]]:
+    """(name, value) of the fields a panel edits: all but child nodes and node tuples."""
+    out = []
+    for f in dataclasses.fields(record):
+        value = getattr(record, f.name)
+        if isinstance(value, Node) or (isinstance(value, tuple) and value
+                                       and isinstance(value[0], Node)):
+            continue
+        if f.name == "kind":
+            continue
+        out.append((f.name, value))
+    return out
+
+
+def _literal_choices(hint) -> list | None:
+    if typing.get_origin(hint) is typing.Literal:
+        return list(typing.get_args(hint))
+    return None
+
+
+def runner_params(window: Window, size, title: str):
+    """hello_imgui's parameters for ``window``: its callbacks, the size, no idling (the view
+    animates), no ini file (tests and classes start from the same layout)."""
+    from imgui_bundle import hello_imgui
+    params = hello_imgui.RunnerParams()
+    params.app_window_params.window_title = title
+    params.app_window_params.window_geometry.size = tuple(size)
+    params.app_window_params.restore_previous_geometry = False
+    params.callbacks.post_init = window.post_init
+    params.callbacks.custom_background = window.background
+    params.callbacks.show_gui = window.gui
+    # No full-window ImGui window over the view: the mouse on the view is the camera's.
+    params.imgui_window_params.default_imgui_window_type = \
+        hello_imgui.DefaultImGuiWindowType.no_default_window
+    params.fps_idling.enable_idling = False
+    params.ini_disable = True
+    return params
+
+
+def run(window: Window, size, title: str = "marchlab view", test=None) -> None:
+    """Open the window and run until it is closed (or its frames are drawn, or ``test``,
+    an `imgui_bundle.immapp.testing` test function, ends)."""
+    from imgui_bundle import immapp
+    params = runner_params(window, size, title)
+    add_ons = immapp.AddOnsParams(with_implot=True)
+    if test is None:
+        immapp.run(params, add_ons)
+    else:
+        from imgui_bundle.immapp import testing
+        testing.run(test_function=test, runner_params=params, add_ons_params=add_ons)
+    if window.error is not None:
+        raise window.error
+
+
+def window_problem() -> str | None:
+    """None if a window can open here, else one line saying why not and how to fix it."""
+    import importlib.util
+    import os
+    import sys
+    for module, extra in (("imgui_bundle", "view"), ("moderngl", "gpu")):
+        if importlib.util.find_spec(module) is None:
+            return (f"the view needs {module}: pip install 'marchlab[{extra}]' "
+                    "(make demo installs it)")
+    if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY")
+                                                 or os.environ.get("WAYLAND_DISPLAY")):
+        return ("no display to open a window on (DISPLAY is not set): run it on a desktop, "
+                "or headless as `xvfb-run -a marchlab view ...` (apt-get install xvfb)")
+    return None
