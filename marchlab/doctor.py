@@ -25,7 +25,8 @@ from .render import BACKENDS, backend_problem
 # The Debian packages (apt) and the Python modules (pip extra of the same name) each backend
 # needs beyond NumPy.
 APT_PACKAGES = {"gpu": ("libegl1", "libegl-mesa0", "libgl1-mesa-dri"),
-                "opencl": ("pocl-opencl-icd", "ocl-icd-libopencl1")}
+                "opencl": ("pocl-opencl-icd", "ocl-icd-libopencl1"),
+                "view": ("xvfb",)}    # a display in memory: headless `marchlab view`, its tests
 PYTHON_MODULES = {"gpu": ("moderngl",), "opencl": ("pyopencl",)}
 
 

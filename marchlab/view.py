@@ -58,7 +58,7 @@ class Viewer:
 
     Parameters
     ----------
-    source : str or path
+    source : str or os.PathLike
         A bundled scene's name or a scene file (`scene_model.scenefile.load_scene`).
     size : (int, int)
         The view's size in pixels, width by height.

@@ -327,12 +327,13 @@ BASE = {
                        "--repeat", "3"),
     "scenes": ("scenes",),
     "doctor": ("doctor",),
+    "view": ("view", "classroom", "--frames", "1", "--size", "8x6"),
 }
 # Subcommands whose valid runs take longer than a case may: only values no reading can
 # accept are tried on them, and each must be refused before the work starts, within
 # REFUSAL_TIME_LIMIT (their base command line above takes ten times as long to run; their
-# valid runs have tests of their own: tests/test_accuracy.py).
-ONLY_REFUSALS = ("bench accuracy",)
+# valid runs have tests of their own: tests/test_accuracy.py, tests/view).
+ONLY_REFUSALS = ("bench accuracy", "view")     # view: a valid run opens a window
 REFUSAL_TIME_LIMIT = 5.0
 
 # Option values, ordinary (a careful user might type them) and bad (nobody should).

@@ -70,9 +70,9 @@ def test_the_test_engine_drives_sliders_combos_mouse_and_the_object_tree(window,
     assert seen["overlay"] == "steps"
     assert seen["shadows"] == "soft"
     turned = _azimuth(seen["after drag"]) - _azimuth(seen["before drag"])
-    # 60 px on a 720 px view is 15 degrees; ImGui holds back the first pixel of a drag (its
-    # drag threshold), so up to one pixel's worth (0.25 degrees) may be missing.
-    assert turned == pytest.approx(-15.0, abs=0.3)
+    # 56 px on a 560 px view is 18 degrees; ImGui holds back the first pixel of a drag (its
+    # drag threshold), so up to one pixel's worth (0.32 degrees) may be missing.
+    assert turned == pytest.approx(-18.0, abs=0.35)
     distance = [np.linalg.norm(np.subtract(*seen[key])) for key in ("after drag", "after wheel")]
     assert distance[1] / distance[0] == pytest.approx(0.9)
     assert seen["added"] == "torus"

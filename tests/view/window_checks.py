@@ -19,7 +19,8 @@ from marchlab.view import Viewer
 from marchlab.view_window import Window, run
 
 SIZE = (160, 120)        # a view for image checks
-PANEL_SIZE = (960, 720)  # room for the panels and free space between them
+PANEL_SIZE = (780, 560)  # room for the panels and free space between them, inside the
+                         # 800x600 screen Xvfb has by default
 
 
 class ScreenWindow(Window):
@@ -80,11 +81,11 @@ def drive(out: Path) -> None:
         seen["overlay"] = viewer.overlay
         ctx.combo_click("shadows##render/soft")
         seen["shadows"] = viewer.scene.render.shadows
-        ctx.mouse_move_to_pos((480.0, 400.0))          # clear of the panels
+        ctx.mouse_move_to_pos((390.0, 300.0))          # clear of the panels
         camera("before drag")
-        ctx.mouse_drag_with_delta((60.0, 0.0), 0)
+        ctx.mouse_drag_with_delta((56.0, 0.0), 0)
         camera("after drag")
-        ctx.mouse_move_to_pos((480.0, 400.0))
+        ctx.mouse_move_to_pos((390.0, 300.0))
         ctx.mouse_wheel_y(1.0)
         ctx.yield_(2)
         camera("after wheel")
