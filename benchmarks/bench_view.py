@@ -66,8 +66,8 @@ def main() -> None:
     parser.add_argument("--frames", type=int, default=120)
     args = parser.parse_args()
     size = tuple(int(s) for s in args.size.split("x"))
-    print(f"| scene | view | fps orbiting, reduced resolution while moving | fps orbiting, "
-          f"full resolution | full resolution again after stopping |")
+    print("| scene | view | fps orbiting, reduced resolution while moving | fps orbiting, "
+          "full resolution | full resolution again after stopping |")
     print("|---|---|---:|---:|---:|")
     renderer = ""
     for scene in args.scenes.split(","):

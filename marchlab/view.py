@@ -111,11 +111,9 @@ class Viewer:
         """Make ``scene`` the edited scene, one undo step (``coalesce``: steps with the same
         key in a row, as one slider drag makes, are one step). The view's camera is not
         ``scene``'s: it moves with the mouse and with `set_field` ("camera.fov")."""
-        structure_changed = len(scene.bodies) != len(self.history.scene.bodies)
         self.history.push(dataclasses.replace(scene, camera=self.history.scene.camera), label,
                           coalesce=coalesce)
-        if structure_changed or scene.bodies != self._played_bodies:
-            self._reset_playback()
+        self._sync_playback()
 
     def set_field(self, path: str, value) -> bool:
         """Set one field (``"render.epsilon"``, ``"materials.red.kd"``, ``"camera.fov"``) as
@@ -143,11 +141,13 @@ class Viewer:
             self.history.redo()
             self._after_history()
 
-    def _after_history(self) -> None:
+    def _after_history(self, restart_physics: bool = False) -> None:
         if self.selection is not None and not _exists(self.history.scene, self.selection):
             self.selection = None
-        if self.history.scene.bodies != self._played_bodies:
+        if restart_physics:
             self._reset_playback()
+        else:
+            self._sync_playback()
 
     def save(self, path=None) -> Path:
         """Write the scene, with the view's camera, as TOML (to its own file by default; a
@@ -184,8 +184,7 @@ class Viewer:
             return False
         self.history.push(scene, "reload from disk")
         self.saved_scene = dataclasses.replace(scene, camera=self.camera)
-        self._after_history()
-        self._reset_playback()
+        self._after_history(restart_physics=True)
         self.status = f"reloaded {self.path.name}"
         return True
 
@@ -276,9 +275,16 @@ class Viewer:
 
     # --- physics -----------------------------------------------------------------------------
 
+    def _sync_playback(self) -> None:
+        """Start the physics again from the edited scene if its bodies or its [physics]
+        settings changed: the playback simulates the scene it was made from."""
+        scene = self.history.scene
+        if (scene.bodies, scene.physics) != self._played:
+            self._reset_playback()
+
     def _reset_playback(self) -> None:
         scene = self.history.scene
-        self._played_bodies = scene.bodies
+        self._played = (scene.bodies, scene.physics)
         if scene.bodies:
             from .playback import Playback
             self.playback = Playback(scene)
@@ -332,10 +338,7 @@ class Viewer:
     def drawn_scene(self) -> Scene:
         """The scene as the renderer draws it: the view's camera, the bodies where the
         physics has them, the bodies turned into objects."""
-        scene = self.scene
-        if self.playback is not None:
-            scene = scene_at(scene, self.playback.positions())
-        return rendered_scene(scene)
+        return rendered_scene(self.scene_now())
 
     def record_frame_time(self, seconds: float) -> None:
         self.frame_times.append(seconds)
@@ -353,10 +356,12 @@ class Viewer:
         (x, y) in view pixels, row 0 at the top."""
         from .probe import probe
         width, height = self.size
-        self.probe = probe(self.scene_for_probe(), int(x), int(y), width, height)
+        self.probe = probe(self.scene_now(), int(x), int(y), width, height)
         self.probe_at = (int(x), int(y))
 
-    def scene_for_probe(self) -> Scene:
+    def scene_now(self) -> Scene:
+        """The edited scene with the view's camera and the bodies where the physics has
+        them (what the probe and the reference check look at)."""
         scene = self.scene
         if self.playback is not None:
             scene = scene_at(scene, self.playback.positions())
@@ -366,7 +371,7 @@ class Viewer:
         """Render the view with the NumPy reference and compare ``gpu_frame`` (the gpu
         backend's frame of the same view, with path labels) to it under the equivalence
         gates; in a thread when ``background``, so the window keeps drawing. Sets `check`."""
-        scene = self.scene_for_probe()
+        scene = self.scene_now()
         height, width = gpu_frame.height, gpu_frame.width
         self.check = None
         self.check_progress = (0, width * height)

@@ -48,14 +48,13 @@ class ViewDrawer:
         self.renders = 0                  # frames rendered (not just shown)
         self.render_seconds = 0.0         # of the last one, CPU side
 
-    def update(self, viewer: Viewer, wait: bool = False) -> bool:
+    def update(self, viewer: Viewer) -> bool:
         """Render the view again if what it shows changed; whether a new picture is drawn.
 
         The program is generated here, on the GL thread (a few milliseconds; a program seen
         before comes from the renderer's cache, so moving the camera or a body compiles
         nothing). A structural edit compiles a new program in this frame: on llvmpipe that
-        holds the frame for 10-50 ms (docs/viewer.md). ``wait`` is accepted for callers that
-        need the picture drawn now (a screenshot); drawing is always immediate.
+        holds the frame for 10-50 ms (docs/viewer.md).
         """
         scene, size = viewer.drawn_scene(), viewer.render_size()
         if self.drawn is not None and self.drawn == (scene, size):
@@ -94,29 +93,25 @@ class ViewDrawer:
                           max_steps=scene.render.max_steps, depth_range=self.depth,
                           selected=viewer.selected_ids(), viewport=viewport)
 
-    def image(self, viewer: Viewer, outline: bool = False) -> np.ndarray:
-        """The view at full resolution as an (H, W, 3) uint8 picture (no panels), drawn now
-        if the view shows a reduced one, read back and encoded as `marchlab render` encodes
-        a frame (`gpu_shader.display.overlay_image`); ``outline``: with the selection's."""
-        from gpu_shader.display import overlay_image
+    def image(self, viewer: Viewer) -> np.ndarray:
+        """The view at full resolution as an (H, W, 3) uint8 picture (no panels, no
+        outline), drawn now if the view shows a reduced one: what `screenshot` writes."""
         refine, viewer.refine = viewer.refine, False
         try:
-            self.update(viewer, wait=True)
+            self.update(viewer)
         finally:
             viewer.refine = refine
+        return self.shown_image(viewer, outline=False)
+
+    def shown_image(self, viewer: Viewer, outline: bool = True) -> np.ndarray:
+        """The picture drawn last (at the resolution it was drawn at), read back and encoded
+        as `marchlab render` encodes a frame (`gpu_shader.display.overlay_image`), with the
+        selection's outline if ``outline``: a frame of a recording."""
+        from gpu_shader.display import overlay_image
         scene, (width, height) = self.drawn
         with self.ctx:
             frame = self.renderer.read_frame(self.target, scene, width, height)
         return overlay_image(frame, viewer.overlay, viewer.selected_ids() if outline else ())
-
-    def shown_image(self, viewer: Viewer) -> np.ndarray:
-        """The picture shown now (at the resolution it was drawn at), read back: a frame of
-        a recording."""
-        from gpu_shader.display import overlay_image
-        scene, (width, height) = self.drawn
-        with self.ctx:
-            frame = self.renderer.read_frame(self.target, scene, width, height)
-        return overlay_image(frame, viewer.overlay, viewer.selected_ids())
 
     def screenshot(self, viewer: Viewer, path) -> Path:
         """Write the 3D view alone, at full resolution, to a PNG."""
@@ -209,6 +204,7 @@ class Window:
         self.add_kind = "sphere"
         self.textures = {}
         self._mouse_on_ball = False
+        self._press = (math.nan, math.nan)   # where the left button went down on the view
         self.requests = []           # callables to run on the GL thread (`on_gl_thread`)
 
     def on_gl_thread(self, function) -> None:
@@ -312,8 +308,7 @@ class Window:
                 if self._mouse_on_ball:
                     viewer.release_ball()
                     self._mouse_on_ball = False
-                elif imgui.get_mouse_drag_delta(imgui.MouseButton_.left, 0.0).x ** 2 + \
-                        imgui.get_mouse_drag_delta(imgui.MouseButton_.left, 0.0).y ** 2 < 4:
+                elif math.dist(self._press, (x, y)) < 2:       # a click, not a drag
                     self._click(x, y)
             if io.mouse_wheel:
                 viewer.scroll(io.mouse_wheel)
@@ -354,38 +349,28 @@ class Window:
     # Panels --------------------------------------------------------------------------------
 
     def _panels(self) -> None:
-        from imgui_bundle import imgui
         self._menu()
-        imgui.set_next_window_pos((10, 30), imgui.Cond_.first_use_ever)
-        imgui.set_next_window_size((330, 460), imgui.Cond_.first_use_ever)
-        if imgui.begin("Scene")[0]:
-            self._scene_panel()
-        imgui.end()
         right = self.viewer.size[0] - 320
-        imgui.set_next_window_pos((right, 30), imgui.Cond_.first_use_ever)
-        imgui.set_next_window_size((310, 420), imgui.Cond_.first_use_ever)
-        if imgui.begin("Render")[0]:
-            self._render_panel()
-        imgui.end()
+        self._panel("Scene", self._scene_panel, (10, 30), (330, 460))
+        self._panel("Render", self._render_panel, (right, 30), (310, 420))
         if self.viewer.playback is not None:
-            imgui.set_next_window_pos((right, 460), imgui.Cond_.first_use_ever)
-            imgui.set_next_window_size((310, 260), imgui.Cond_.first_use_ever)
-            if imgui.begin("Physics")[0]:
-                self._physics_panel()
-            imgui.end()
-        imgui.set_next_window_pos((10, 500), imgui.Cond_.first_use_ever)
-        imgui.set_next_window_size((330, 170), imgui.Cond_.first_use_ever)
-        if imgui.begin("Performance")[0]:
-            self._performance_panel()
-        imgui.end()
+            self._panel("Physics", self._physics_panel, (right, 460), (310, 260))
+        self._panel("Performance", self._performance_panel, (10, 500), (330, 170))
         if self.viewer.probe is not None:
-            if imgui.begin("Probe")[0]:
-                self._probe_panel()
-            imgui.end()
+            self._panel("Probe", self._probe_panel)
         if self.viewer.check is not None or self.viewer.check_progress is not None:
-            if imgui.begin("Check against the reference")[0]:
-                self._check_panel()
-            imgui.end()
+            self._panel("Check against the reference", self._check_panel)
+
+    @staticmethod
+    def _panel(title: str, draw, position=None, size=None) -> None:
+        """One ImGui window, placed at ``position`` with ``size`` when first shown."""
+        from imgui_bundle import imgui
+        if position is not None:
+            imgui.set_next_window_pos(position, imgui.Cond_.first_use_ever)
+            imgui.set_next_window_size(size, imgui.Cond_.first_use_ever)
+        if imgui.begin(title)[0]:
+            draw()
+        imgui.end()
 
     def _menu(self) -> None:
         from imgui_bundle import imgui
@@ -746,7 +731,7 @@ class _Gl:
         self.window = window
 
     def object_id_at(self, x, y) -> int:
-        self.window.drawer.update(self.window.viewer, wait=True)
+        self.window.drawer.update(self.window.viewer)
         return self.window.drawer.object_id_at(self.window.viewer, x, y)
 
     def screenshot(self, path) -> None:

@@ -51,7 +51,7 @@ def _rewrite(path, text):
     os.utime(path, ns=(before + 1_000_000_000, before + 1_000_000_000))
 
 
-def _cameras_equal(a, b, tol=1e-12):
+def assert_cameras_equal(a, b, tol=1e-12):
     np.testing.assert_allclose(a.position, b.position, rtol=0, atol=tol)
     np.testing.assert_allclose(a.look_at, b.look_at, rtol=0, atol=tol)
     np.testing.assert_allclose(a.up, b.up, rtol=0, atol=tol)
@@ -103,36 +103,36 @@ def test_render_size_is_resolution_scale_of_each_side(viewer):
 def test_drag_moves_the_camera_as_camera_control_drag(viewer, button, dx, dy):
     expected = camera_control.drag(viewer.camera, button, dx, dy, SIZE[1])
     viewer.drag(button, dx, dy)
-    _cameras_equal(viewer.camera, expected, tol=0)
+    assert_cameras_equal(viewer.camera, expected, tol=0)
 
 
 def test_scroll_moves_the_camera_as_camera_control_scroll(viewer):
     expected = camera_control.scroll(viewer.camera, 2.5)
     viewer.scroll(2.5)
-    _cameras_equal(viewer.camera, expected, tol=0)
+    assert_cameras_equal(viewer.camera, expected, tol=0)
 
 
 def test_fly_moves_the_camera_as_camera_control_fly_keys(viewer):
     expected = camera_control.fly_keys(viewer.camera, {"D", "E"}, 0.3, True)
     viewer.fly({"D", "E"}, 0.3, fast=True)
-    _cameras_equal(viewer.camera, expected, tol=0)
+    assert_cameras_equal(viewer.camera, expected, tol=0)
 
 
 def test_advance_with_w_held_flies_forward_for_those_seconds(viewer):
     expected = camera_control.fly_keys(viewer.camera, {"W"}, 0.2)
     viewer.hold_keys({"w"})
     viewer.advance(0.2)
-    _cameras_equal(viewer.camera, expected, tol=1e-12)
+    assert_cameras_equal(viewer.camera, expected, tol=1e-12)
     viewer.hold_keys(set())
     viewer.advance(0.2)                     # nothing held: the camera stays
-    _cameras_equal(viewer.camera, expected, tol=0)
+    assert_cameras_equal(viewer.camera, expected, tol=0)
 
 
 def test_reset_camera_returns_to_the_files_camera(viewer):
     viewer.drag("left", 100, 30)
     viewer.scroll(3)
     viewer.reset_camera()
-    _cameras_equal(viewer.camera, load_scene(PLAIN_SCENE).camera, tol=0)
+    assert_cameras_equal(viewer.camera, load_scene(PLAIN_SCENE).camera, tol=0)
 
 
 # --- editing fields ----------------------------------------------------------------------
@@ -339,6 +339,16 @@ def _grab_centre(viewer, body=0):
     centre = viewer.playback.positions()[body]
     x, y, _ = project(viewer.camera, [centre], *viewer.size)[0]
     return centre, x, y
+
+
+def test_editing_the_physics_settings_restarts_the_playback_with_them(bodies_viewer):
+    bodies_viewer.playback.play()
+    bodies_viewer.advance(0.1)
+    assert bodies_viewer.set_field("physics.restitution", 0.9)
+    assert bodies_viewer.playback.settings.restitution == 0.9
+    assert bodies_viewer.playback.time == 0.0
+    bodies_viewer.undo()
+    assert bodies_viewer.playback.settings.restitution != 0.9
 
 
 def test_grab_ball_on_a_bodys_centre_takes_hold_of_it(bodies_viewer):

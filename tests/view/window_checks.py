@@ -52,14 +52,14 @@ def edit(out: Path) -> None:
     window = Window(viewer)
     shots = {}
 
-    def drive(ctx):
+    def set_max_steps(ctx):
         ctx.set_ref("//Render")
         ctx.item_input_value("max_steps##render", 24)
         ctx.yield_(2)
         window.on_gl_thread(lambda: shots.update(view=window.drawer.image(viewer)))
         ctx.yield_(2)
 
-    run(window, SIZE, test=drive)
+    run(window, SIZE, test=set_max_steps)
     np.savez(out / "result.npz", view=shots["view"])
     _state(out, max_steps=viewer.scene.render.max_steps)
 
@@ -73,7 +73,7 @@ def drive(out: Path) -> None:
     def camera(key):
         seen[key] = [list(viewer.camera.position), list(viewer.camera.look_at)]
 
-    def test(ctx):
+    def moves(ctx):
         ctx.set_ref("//Render")
         ctx.item_input_value("epsilon##render", 0.004)
         seen["epsilon"] = viewer.scene.render.epsilon
@@ -100,7 +100,7 @@ def drive(out: Path) -> None:
         ctx.item_click("Add")
         seen["objects at the end"] = len(viewer.history.scene.objects)
 
-    run(Window(viewer), PANEL_SIZE, test=test)
+    run(Window(viewer), PANEL_SIZE, test=moves)
     viewer.save(out / "edited.toml")
     _state(out, **seen)
 
