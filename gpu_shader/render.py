@@ -27,6 +27,7 @@ from .library import glsl_file
 from .planes import frame_from_planes, row_bands
 
 PROGRAM_CACHE_SIZE = 32
+TARGET_CACHE_SIZE = 8       # sizes kept (a live view draws at a few reduced ones)
 
 
 class ShaderCompileError(MarchlabError):
@@ -73,7 +74,7 @@ class Renderer:
     def __init__(self, ctx):
         self.ctx = ctx
         self.programs: OrderedDict[tuple[str, str], tuple] = OrderedDict()
-        self.targets: dict[tuple[int, int], tuple] = {}
+        self.targets: OrderedDict[tuple[int, int], object] = OrderedDict()
         self.max_block = int(ctx.info["GL_MAX_UNIFORM_BLOCK_SIZE"])
         self.flat_rows = min(MAX_FLAT_ROWS, int(ctx.info.get("GL_MAX_VARYING_VECTORS", 0)))
 
@@ -168,10 +169,17 @@ class Renderer:
         """A framebuffer of the given size (kept for reuse): two RGBA32F textures and one
         RGBA32I, the planes of `gpu_shader.planes`."""
         key = (width, height)
-        if key not in self.targets:
-            textures = [self.ctx.texture((width, height), 4, dtype=dtype)
-                        for dtype in ("f4", "f4", "i4")]
-            self.targets[key] = self.ctx.framebuffer(color_attachments=textures)
+        if key in self.targets:
+            self.targets.move_to_end(key)
+            return self.targets[key]
+        textures = [self.ctx.texture((width, height), 4, dtype=dtype)
+                    for dtype in ("f4", "f4", "i4")]
+        self.targets[key] = self.ctx.framebuffer(color_attachments=textures)
+        if len(self.targets) > TARGET_CACHE_SIZE:
+            _, old = self.targets.popitem(last=False)
+            for texture in old.color_attachments:
+                texture.release()
+            old.release()
         return self.targets[key]
 
 
