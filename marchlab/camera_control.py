@@ -61,3 +61,12 @@ def fly_keys(camera: Camera, keys, seconds: float, fast: bool = False) -> Camera
     distance = np.linalg.norm(np.subtract(camera.look_at, camera.position))
     speed = FLY_SPEED * distance * (FAST if fast else 1.0)
     return fly(camera, speed * direction, seconds)
+
+
+def turntable(camera: Camera, frames: int) -> list[Camera]:
+    """``frames`` cameras a whole turn about the pivot, counter-clockwise seen from above:
+    frame k is ``camera`` orbited by 360 k / frames degrees about its up axis (each from the
+    first, so the turn does not drift), and a turntable played in a loop has no seam."""
+    if frames < 1:
+        raise ValueError(f"a turntable has at least one frame (got {frames})")
+    return [orbit(camera, yaw=360.0 * k / frames, pitch=0.0) for k in range(frames)]

@@ -9,9 +9,10 @@ drawing is `ViewDrawer`'s, which the window makes once it has a context.
 
 Drawing on demand. The view renders only when what it shows changes (the camera, the scene,
 a body, the size), so a still view costs nothing; while the camera moves it renders at
-`MOVING_SCALE` of the resolution, and at full resolution again `SETTLE_SECONDS` after the
+`moving_scale` of the resolution, and at full resolution again `SETTLE_SECONDS` after the
 motion stops (the teacher's target, docs/viewer.md: 30 frames per second while orbiting,
-full resolution within 0.5 s of stopping).
+full resolution within 0.5 s of stopping). The moving scale adapts to the frame rate
+(`adapt_moving_scale`): a heavy scene moves at a coarser picture, a light one at a finer.
 """
 
 from __future__ import annotations
@@ -35,7 +36,10 @@ from scene_model import editing
 
 from . import camera_control
 
-MOVING_SCALE = 0.35         # of each side, while the camera moves
+MOVING_SCALE = 0.35         # of each side, while the camera moves (where it starts)
+MOVING_SCALES = (0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.45, 0.5)   # what it adapts between
+TARGET_FPS = 30.0           # while moving
+MARKER_RADIUS = 8.0         # pixels: a press this close to a light's marker takes hold of it
 SETTLE_SECONDS = 0.25       # after the last motion, the view refines to full resolution
 OVERLAYS = ("color", "steps", "depth", "normal", "object_id")
 FRAME_HISTORY = 240         # frame times kept for the plot
@@ -73,6 +77,8 @@ class Viewer:
         self.selection: tuple | None = None
         self.resolution_scale = 1.0
         self.moving_scale = MOVING_SCALE
+        self.adapt = True            # adapt moving_scale to the frame rate
+        self._idle_times = collections.deque(maxlen=60)   # of frames that rendered nothing
         self.refine = True           # draw at reduced resolution while moving
         self.frame_times = collections.deque(maxlen=FRAME_HISTORY)
         self.status = ""
@@ -81,6 +87,8 @@ class Viewer:
         self.probe = None
         self._last_motion = -math.inf
         self._held_keys: set[str] = set()
+        self._holding = None         # what a left drag carries (`press`)
+        self._gesture = 0            # one undo step per drag
         self.open(source)
 
     # --- the scene -------------------------------------------------------------------------
@@ -227,13 +235,19 @@ class Viewer:
 
     def reparent_selected(self, parent) -> None:
         if self.selection is not None:
-            try:
-                scene, path = editing.reparent(self.history.scene, self.selection, parent)
-            except SceneError as err:
-                self.status = f"not moved: {err}"
-                return
-            self.edit(scene, "re-parent")
-            self.selection = path
+            self.reparent(self.selection, parent)
+
+    def reparent(self, path, parent) -> None:
+        """Move the node at ``path`` into the operator at ``parent`` (None: the top level)
+        and select it there; a move the scene refuses changes nothing (not the selection
+        either) and says why."""
+        try:
+            scene, moved = editing.reparent(self.history.scene, tuple(path), parent)
+        except SceneError as err:
+            self.status = f"not moved: {err}"
+            return
+        self.edit(scene, "re-parent")
+        self.selection = moved
 
     # --- the camera ------------------------------------------------------------------------
 
@@ -265,12 +279,17 @@ class Viewer:
     def moving(self) -> bool:
         return self.clock() - self._last_motion < SETTLE_SECONDS
 
-    def render_size(self) -> tuple[int, int]:
-        """The size the view renders at now: `resolution_scale` of the window, times
-        `moving_scale` while the camera moves."""
+    def rest_size(self) -> tuple[int, int]:
+        """The size the view renders at when still: `resolution_scale` of the window."""
         scale = min(max(self.resolution_scale, MIN_SCALE), MAX_SCALE)
-        if self.refine and self.moving:
-            scale *= self.moving_scale
+        return tuple(max(1, round(side * scale)) for side in self.size)
+
+    def render_size(self) -> tuple[int, int]:
+        """The size the view renders at now: `rest_size`, times `moving_scale` while the
+        camera moves."""
+        if not (self.refine and self.moving):
+            return self.rest_size()
+        scale = min(max(self.resolution_scale, MIN_SCALE), MAX_SCALE) * self.moving_scale
         return tuple(max(1, round(side * scale)) for side in self.size)
 
     # --- physics -----------------------------------------------------------------------------
@@ -310,25 +329,107 @@ class Viewer:
             return False
         self.playback.grab(index)
         centre = self.playback.positions()[index]
-        forward = camera_basis(self.camera)[0]
-        self._grab_plane = (centre, forward)
+        self._grab_plane = (centre, camera_basis(self.camera)[0])
         return True
 
     def drag_ball(self, x: float, y: float) -> None:
         if self.playback is None or getattr(self, "_grab_plane", None) is None:
             return
-        centre, normal = self._grab_plane
-        origin, direction = pixel_ray(self.camera, x, y, *self.size)
-        denominator = direction @ normal
-        if abs(denominator) > 1e-9:
-            t = ((centre - origin) @ normal) / denominator
-            if t > 0:
-                self.playback.drag_to(origin + t * direction)
+        point = self._on_plane(x, y, *self._grab_plane)
+        if point is not None:
+            self.playback.drag_to(point)
 
     def release_ball(self) -> None:
         if self.playback is not None and getattr(self, "_grab_plane", None) is not None:
             self.playback.release()
         self._grab_plane = None
+
+    def _on_plane(self, x: float, y: float, point, normal):
+        """Where the ray through view pixel (x, y) meets the plane through ``point`` with
+        ``normal`` (None: parallel to it, or behind the eye)."""
+        origin, direction = pixel_ray(self.camera, x, y, *self.size)
+        denominator = direction @ normal
+        if abs(denominator) < 1e-9:
+            return None
+        t = ((np.asarray(point) - origin) @ normal) / denominator
+        return origin + t * direction if t > 0 else None
+
+    # --- dragging things in the view -------------------------------------------------------
+
+    def light_markers(self) -> list[tuple[int, float, float]]:
+        """(index, x, y): where each light with a position (point, spot) is marked in the
+        view, in view pixels (lights behind the eye are left out)."""
+        from scene_model.camera import project
+        out = []
+        for i, light in enumerate(self.history.scene.lights):
+            if getattr(light, "position", None) is None:
+                continue
+            x, y, depth = project(self.camera, [light.position], *self.size)[0]
+            if math.isfinite(x) and depth > 0:
+                out.append((i, float(x), float(y)))
+        return out
+
+    def press(self, x: float, y: float, shift: bool = False) -> str | None:
+        """The left button went down on view pixel (x, y): take hold of what is there, for
+        `move_to` to carry. A light's marker (within `MARKER_RADIUS` pixels) comes first;
+        with ``shift``, the selected top-level object; else a body. Returns "light",
+        "object", "ball", or None (nothing: the drag orbits)."""
+        self.let_go()
+        near = [(math.hypot(mx - x, my - y), i) for i, mx, my in self.light_markers()]
+        near = [item for item in near if item[0] <= MARKER_RADIUS]
+        if near:
+            path = f"lights.{min(near)[1]}.position"
+        elif shift and self.selection is not None and len(self.selection) == 1:
+            path = f"objects[{self.selection[0]}].position"
+        elif self.grab_ball(x, y):
+            self._holding = ("ball",)
+            return "ball"
+        else:
+            return None
+        start = np.asarray(editing.get_field(self.history.scene, path) or (0.0, 0.0, 0.0),
+                           np.float64)
+        normal = camera_basis(self.camera)[0]
+        hit = self._on_plane(x, y, start, normal)
+        if hit is None:
+            return None
+        self._gesture += 1
+        self._holding = (path, start, hit, normal)
+        return "light" if path.startswith("lights") else "object"
+
+    def move_to(self, x: float, y: float) -> None:
+        """Carry what `press` took hold of under view pixel (x, y): a light or an object
+        moves in the plane through where it was, facing the camera, so the point pressed
+        stays under the cursor; the whole drag is one undo step."""
+        if self._holding is None:
+            return
+        if self._holding[0] == "ball":
+            self.drag_ball(x, y)
+            return
+        path, start, hit, normal = self._holding
+        now = self._on_plane(x, y, start, normal)
+        if now is None:
+            return
+        position = tuple(float(v) for v in start + (now - hit))
+        try:
+            scene = editing.set_field(self.history.scene, path, position)
+        except (SceneError, MarchlabError) as err:
+            self.status = f"not moved: {err}"
+            return
+        self.edit(scene, f"move {path.rsplit('.', 1)[0]}", coalesce=(path, self._gesture))
+
+    def let_go(self) -> None:
+        """The left button went up: a ball is thrown, a light or object stays."""
+        if self._holding is not None and self._holding[0] == "ball":
+            self.release_ball()
+        self._holding = None
+
+    @property
+    def holding(self) -> str | None:
+        """What a drag carries now: "light", "object", "ball", or None."""
+        if self._holding is None:
+            return None
+        return self._holding[0] if self._holding[0] == "ball" else \
+            ("light" if self._holding[0].startswith("lights") else "object")
 
     def hold_keys(self, keys) -> None:
         self._held_keys = {k.upper() for k in keys}
@@ -340,8 +441,18 @@ class Viewer:
         physics has them, the bodies turned into objects."""
         return rendered_scene(self.scene_now())
 
-    def record_frame_time(self, seconds: float) -> None:
+    def record_frame_time(self, seconds: float, drew: bool = True,
+                          drew_moving: bool = False) -> None:
+        """One frame's wall time. ``drew``: it rendered the scene; a frame that did not
+        measures the frame's fixed part (panels, display, swap). ``drew_moving``: it rendered
+        a reduced picture while moving, so its time says whether `moving_scale` suits this
+        scene (`adapt_moving_scale`)."""
         self.frame_times.append(seconds)
+        if not drew:
+            self._idle_times.append(seconds)
+        if drew_moving and self.adapt:
+            fixed = min(self._idle_times) if self._idle_times else 0.0
+            self.moving_scale = adapt_moving_scale(self.moving_scale, seconds, fixed)
 
     def fps(self) -> float:
         """Frames per second over the frame times kept (0 before any)."""
@@ -377,6 +488,14 @@ class Viewer:
         self.check_progress = (0, width * height)
 
         def work():
+            try:
+                check()
+            except Exception as err:       # the thread's end: say why in the window
+                self.status = f"check failed: {type(err).__name__}: {err}"
+            finally:
+                self.check_progress = None
+
+        def check():
             start = time.perf_counter()
             from .compare import compare_frames, failures, gates_against
             from .render import render
@@ -389,14 +508,41 @@ class Viewer:
             self.check = CheckResult(a, b, difference.astype(np.uint8),
                                      failures(comparison, gates_against("float64")),
                                      comparison.rows(), time.perf_counter() - start)
-            self.check_progress = None
 
         if not background:
-            work()
+            try:
+                check()
+            finally:
+                self.check_progress = None
             return None
         thread = threading.Thread(target=work, name="marchlab-check", daemon=True)
         thread.start()
         return thread
+
+
+def adapt_moving_scale(scale: float, frame_seconds: float, fixed_seconds: float = 0.0,
+                       target_fps: float = TARGET_FPS) -> float:
+    """The moving scale for the next frame, after one at ``scale`` that took
+    ``frame_seconds`` (dynamic resolution, as game engines do it).
+
+    One step down `MOVING_SCALES` when the frame missed ``target_fps``. One step up when the
+    next step would still keep it: a frame is a fixed part (panels, display pass, buffer
+    swap), at least ``fixed_seconds``, plus a render that grows with the picture's area, so
+    the next step's frame is predicted as ``fixed + (frame - fixed) * (next / scale)**2``.
+    With ``fixed_seconds`` a lower bound of the fixed part (0 when unknown) the prediction is
+    an upper bound, so a step up is never undone by the next frame: the scale settles instead
+    of flickering between two steps.
+    """
+    budget = 1.0 / target_fps
+    steps = MOVING_SCALES
+    here = min(range(len(steps)), key=lambda i: abs(steps[i] - scale))
+    fixed = min(max(fixed_seconds, 0.0), frame_seconds)
+    if frame_seconds > budget:
+        here = max(here - 1, 0)
+    elif here + 1 < len(steps) and \
+            fixed + (frame_seconds - fixed) * (steps[here + 1] / steps[here]) ** 2 <= budget:
+        here += 1
+    return steps[here]
 
 
 def _mtime(path: Path):

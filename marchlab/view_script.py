@@ -3,9 +3,9 @@
 A script is a TOML file with a list of ``[[action]]`` tables, each naming one verb::
 
     [[action]]
-    drag = "left"            # or "right" / "middle": orbit, pan (a left drag on a body throws it)
-    from = [320, 240]        # view pixels, from the top-left corner
-    to = [400, 240]
+    drag = "left"            # or "right" / "middle": orbit, pan (a left drag on a light's
+    from = [320, 240]        # marker moves the light, on a body throws it; with shift = true
+    to = [400, 240]          # it moves the selected object); view pixels from the top left
     frames = 8               # spread over this many frames (default 1)
 
     [[action]]
@@ -30,6 +30,9 @@ A script is a TOML file with a list of ``[[action]]`` tables, each naming one ve
     screenshot = "shot.png"  # the 3D view alone, at full resolution
     [[action]]
     save = "edited.toml"     # the scene, as File > Save as
+    [[action]]
+    turntable = "spin.gif"   # one turn about the pivot, recorded (.gif or .mp4); the
+    frames = 72              # script goes on once it is written
 
 Tests drive the window with scripts, and a teacher records a lesson's moves with one. A
 script that cannot be read is refused before the window opens, in one line naming the file,
@@ -46,13 +49,15 @@ from scene_model.errors import MarchlabError
 from scene_model.shapes import node_kinds
 
 from .camera_control import BUTTONS, FLY_KEYS
+from .recording import recording_problem
 from .view import OVERLAYS
 
 PHYSICS = ("play", "pause", "step", "reset", "kick")
 # Each verb and the other keys its table may hold.
-VERBS = {"drag": ("from", "to", "frames"), "scroll": (), "keys": ("seconds", "shift"),
+VERBS = {"drag": ("from", "to", "frames", "shift"), "scroll": (), "keys": ("seconds", "shift"),
          "set": ("value",), "click": (), "overlay": (), "add": (), "delete": (),
-         "undo": (), "redo": (), "physics": (), "wait": (), "screenshot": (), "save": ()}
+         "undo": (), "redo": (), "physics": (), "wait": (), "screenshot": (), "save": (),
+         "turntable": ("frames",)}
 MAX_FRAMES = 10_000
 
 
@@ -107,7 +112,11 @@ def _parse(table: dict) -> list[Action]:
         frames = _count(table.get("frames", 1), "drag: frames", low=1)
         points = [tuple(a + (b - a) * k / frames for a, b in zip(start, end))
                   for k in range(frames + 1)]
+        shift = table.get("shift", False)
+        if not isinstance(shift, bool):
+            raise MarchlabError(f"drag: shift: write true or false (got {shift!r})")
         return [Action("drag", {"button": value, "from": p, "to": q, "first": k == 0,
+                                "shift": shift,
                                 "last": k == frames - 1})
                 for k, (p, q) in enumerate(zip(points, points[1:]))]
     if verb == "scroll":
@@ -141,6 +150,14 @@ def _parse(table: dict) -> list[Action]:
             raise MarchlabError(f"save: {value!r}: a scene file must end in .toml")
         if verb == "screenshot" and not value.lower().endswith(".png"):
             raise MarchlabError(f"screenshot: {value!r}: a screenshot is a .png")
+    if verb == "turntable":
+        if not isinstance(value, str) or not value.strip():
+            raise MarchlabError("turntable: needs a file name")
+        if (problem := recording_problem(value)) is not None:
+            raise MarchlabError(f"turntable: {problem}")
+        return [Action(verb, {"path": value,
+                              "frames": _count(table.get("frames", 72), "turntable: frames",
+                                               low=2)})]
     if verb in ("delete", "undo", "redo") and value is not True:
         raise MarchlabError(f"{verb}: write {verb} = true")
     return [Action(verb, {"value": value})]
@@ -167,18 +184,17 @@ def _pixel(value, what: str) -> tuple[float, float]:
 
 
 def perform(action: Action, viewer, gl) -> None:
-    """Do ``action`` on ``viewer``; ``gl`` answers what needs the GPU: ``object_id_at(x, y)``
-    and ``screenshot(path)`` (the window's `ViewDrawer`)."""
+    """Do ``action`` on ``viewer``; ``gl`` answers what needs the GPU: ``object_id_at(x, y)``,
+    ``screenshot(path)`` and ``turntable(path, frames)`` (the window's)."""
     a = action.arguments
     if action.verb == "drag":
         (x0, y0), (x1, y1) = a["from"], a["to"]
-        if a["first"]:
-            viewer._dragging_ball = a["button"] == "left" and viewer.grab_ball(x0, y0)
-        if getattr(viewer, "_dragging_ball", False):
-            viewer.drag_ball(x1, y1)
+        if a["first"] and a["button"] == "left":
+            viewer.press(x0, y0, shift=a["shift"])
+        if a["button"] == "left" and viewer.holding is not None:
+            viewer.move_to(x1, y1)
             if a["last"]:
-                viewer.release_ball()
-                viewer._dragging_ball = False
+                viewer.let_go()
         else:
             viewer.drag(a["button"], x1 - x0, y1 - y0)
     elif action.verb == "scroll":
@@ -204,6 +220,8 @@ def perform(action: Action, viewer, gl) -> None:
         gl.screenshot(a["value"])
     elif action.verb == "save":
         viewer.save(a["value"])
+    elif action.verb == "turntable":
+        gl.turntable(a["path"], a["frames"])
 
 
 def _physics(viewer, command: str) -> None:
@@ -211,6 +229,6 @@ def _physics(viewer, command: str) -> None:
     if playback is None:
         raise MarchlabError(f"script: physics {command}: the scene has no bodies")
     if command == "kick":
-        playback.kick(1.0, seed=playback.steps)
+        playback.kick(1.0)
     else:
         getattr(playback, command)()

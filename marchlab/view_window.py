@@ -25,7 +25,8 @@ from scene_model.files import write_atomically
 from scene_model.shapes import Node, children, node_kinds
 from scene_model import editing
 
-from .view import OVERLAYS, Viewer
+from .recording import Recorder, Turntable
+from .view import MARKER_RADIUS, MOVING_SCALES, OVERLAYS, TARGET_FPS, Viewer
 
 DIFFERENCE_GAIN = 32
 
@@ -36,28 +37,35 @@ class ViewDrawer:
     The view renders only when what it shows changed, on the thread that owns the context.
     """
 
-    def __init__(self, ctx):
+    def __init__(self, ctx, compiler=None):
         from gpu_shader.display import Display
         from gpu_shader.render import Renderer
         self.ctx = ctx
         self.renderer = Renderer(ctx)
         self.display = Display(ctx)
+        self.compiler = compiler          # a `BackgroundCompiler`, or None: compile in-frame
         self.drawn = None                 # (scene, size) of the picture in `target`
         self.target = None
         self.depth = (0.0, 1.0)
         self.renders = 0                  # frames rendered (not just shown)
         self.render_seconds = 0.0         # of the last one, CPU side
+        self.compiling = False            # the scene shown is not the edited one yet
+        self._compiled_scene = None       # the last scene whose program this context has
+        self._generated = (None, None, None)
 
-    def update(self, viewer: Viewer) -> bool:
+    def update(self, viewer: Viewer, wait: bool = False) -> bool:
         """Render the view again if what it shows changed; whether a new picture is drawn.
 
-        The program is generated here, on the GL thread (a few milliseconds; a program seen
-        before comes from the renderer's cache, so moving the camera or a body compiles
-        nothing). A structural edit compiles a new program in this frame: on llvmpipe that
-        holds the frame for 10-50 ms (docs/viewer.md).
+        A camera move or a moved object needs no new program (the renderer's cache has it,
+        keyed by the text, which holds no camera and no positions). A structural edit does:
+        with a `compiler`, and unless ``wait``, it is compiled on the compiler's thread and
+        the view keeps drawing the scene it last compiled, from the new camera, until the
+        program is ready (`gpu_shader.background_compile`). Without one, or with ``wait``,
+        it is compiled in this frame, which holds the frame for as long as the driver takes.
         """
         scene, size = viewer.drawn_scene(), viewer.render_size()
         if self.drawn is not None and self.drawn == (scene, size):
+            self.compiling = False
             return False
         try:
             program = self._generate(scene, size)
@@ -65,12 +73,34 @@ class ViewDrawer:
             viewer.status = f"cannot draw: {err}"
             self.drawn = (scene, size)
             return False
+        self.compiling = not wait and self._compile_elsewhere(program)
+        if self.compiling:
+            # The old program, from the new camera, at the new size (both are parameters).
+            scene = dataclasses.replace(self._compiled_scene, camera=scene.camera)
+            if self.drawn == (scene, size):
+                return False
+            program = self._generate(scene, size)
         self._draw(scene, size, program, viewer)
+        if not self.compiling:
+            self._compiled_scene = scene
         return True
 
+    def _compile_elsewhere(self, program) -> bool:
+        """Whether ``program`` is being compiled by the compiler (so not drawn yet)."""
+        if self.compiler is None or self._compiled_scene is None \
+                or (program.vertex_source, program.source) in self.renderer.programs:
+            return False
+        self.compiler.request(program)
+        return not self.compiler.ready(program)
+
     def _generate(self, scene, size):
+        """`gpu_shader.generate.generate` of the view (the last one kept: while a program
+        compiles elsewhere, each frame asks for the same one again)."""
         from gpu_shader.generate import generate
-        return generate(scene, *size, flat_rows=self.renderer.flat_rows)
+        if self._generated[:2] != (scene, size):
+            self._generated = (scene, size, generate(scene, *size,
+                                                     flat_rows=self.renderer.flat_rows))
+        return self._generated[2]
 
     def _draw(self, scene, size, program, viewer: Viewer) -> None:
         start = time.perf_counter()
@@ -98,7 +128,7 @@ class ViewDrawer:
         outline), drawn now if the view shows a reduced one: what `screenshot` writes."""
         refine, viewer.refine = viewer.refine, False
         try:
-            self.update(viewer)
+            self.update(viewer, wait=True)
         finally:
             viewer.refine = refine
         return self.shown_image(viewer, outline=False)
@@ -136,51 +166,11 @@ class ViewDrawer:
         return int(np.frombuffer(data, np.int32)[1])
 
     def frame(self, viewer: Viewer):
-        """The gpu backend's `Frame` of the view at full resolution, with path labels (for
-        the check against the reference)."""
-        return self.renderer.render(viewer.drawn_scene(), *viewer.size, path_labels=True)
+        """The gpu backend's `Frame` of the view as it draws at rest (the resolution scale
+        applied), with path labels: what the check against the reference compares."""
+        return self.renderer.render(viewer.drawn_scene(), *viewer.rest_size(),
+                                    path_labels=True)
 
-
-class Recorder:
-    """Frames of the view written to an MP4 or GIF (imageio) as they are shown."""
-
-    def __init__(self, path, fps: float = 30.0):
-        import imageio.v3 as iio
-        self.path = Path(path)
-        if self.path.suffix.lower() not in (".mp4", ".gif"):
-            raise MarchlabError(f"{path}: a recording is an .mp4 or a .gif")
-        self.frames: list[np.ndarray] = []
-        self.fps = fps
-        self._iio = iio
-
-    def add(self, image: np.ndarray) -> None:
-        if self.frames and image.shape != self.frames[0].shape:
-            scale = np.asarray(self.frames[0].shape[:2]) // np.asarray(image.shape[:2])
-            image = np.repeat(np.repeat(image, scale[0], 0), scale[1], 1)
-            image = _fit(image, self.frames[0].shape)
-        self.frames.append(image)
-
-    def finish(self) -> Path:
-        if not self.frames:
-            raise MarchlabError("nothing was recorded")
-        import io
-        buffer = io.BytesIO()
-        extension = self.path.suffix.lower()
-        options = {"fps": self.fps} if extension == ".mp4" else {"duration": 1000 / self.fps,
-                                                                 "loop": 0}
-        self._iio.imwrite(buffer, np.stack(self.frames), extension=extension, **options)
-        write_atomically(self.path, buffer.getvalue())
-        return self.path
-
-
-def _fit(image, shape):
-    out = np.zeros(shape, np.uint8)
-    h, w = min(shape[0], image.shape[0]), min(shape[1], image.shape[1])
-    out[:h, :w] = image[:h, :w]
-    return out
-
-
-# --- the window ---------------------------------------------------------------------------
 
 class Window:
     """The ImGui half: panels, input, the run loop's callbacks."""
@@ -197,15 +187,18 @@ class Window:
         self.frame_count = 0
         self.last_time = None
         self.recorder: Recorder | None = None
+        self.turntable: Turntable | None = None
+        self.turntable_frames = 72
         self.record_path = "view.mp4"
         self.screenshot_name = "view.png"
         self.save_as_name = "edited.toml"
         self.open_name = ""
         self.add_kind = "sphere"
         self.textures = {}
-        self._mouse_on_ball = False
         self._press = (math.nan, math.nan)   # where the left button went down on the view
         self.requests = []           # callables to run on the GL thread (`on_gl_thread`)
+        self._drew = True            # the last frame rendered the scene
+        self._drew_moving = False    # ... at a reduced resolution while moving
 
     def on_gl_thread(self, function) -> None:
         """Run ``function`` in the next frame, on the thread that holds the GL context: the
@@ -220,9 +213,13 @@ class Window:
             ctx = moderngl.create_context()
             if ctx.version_code < 330:
                 raise MarchlabError(f"OpenGL {ctx.version_code / 100:.1f}: the view needs 3.3")
-            self.drawer = ViewDrawer(ctx)
+            self.drawer = ViewDrawer(ctx, compiler=background_compiler())
         except BaseException as err:     # reported after the loop, which must end cleanly
             self._fail(err)
+
+    def before_exit(self) -> None:
+        if self.drawer is not None and self.drawer.compiler is not None:
+            self.drawer.compiler.close()
 
     def background(self) -> None:
         if self.drawer is None:
@@ -232,14 +229,17 @@ class Window:
             now = time.perf_counter()
             if self.last_time is not None:
                 seconds = now - self.last_time
-                self.viewer.record_frame_time(seconds)
+                self.viewer.record_frame_time(seconds, drew=self._drew,
+                                              drew_moving=self._drew_moving)
                 self.viewer.advance(min(seconds, 0.1))
             self.last_time = now
             if self.frame_count % 30 == 0:
                 self.viewer.reload_if_changed()
             while self.requests:
                 self.requests.pop(0)()
-            if self.actions:
+            if self.turntable is not None:
+                self._turn()
+            elif self.actions:
                 from .view_script import perform
                 perform(self.actions.pop(0), self.viewer, _Gl(self))
             io = imgui.get_io()
@@ -247,7 +247,9 @@ class Window:
             scale = io.display_framebuffer_scale
             if width > 0 and height > 0:
                 self.viewer.size = (width, height)
-            self.drawer.update(self.viewer)
+            self._drew = self.drawer.update(self.viewer)
+            self._drew_moving = self._drew and self.drawer.drawn[1] != self.viewer.size \
+                and self.viewer.moving
             ctx = self.drawer.ctx
             screen = ctx.detect_framebuffer(0)      # the window's own, not the last bound
             screen.use()
@@ -257,7 +259,7 @@ class Window:
                 self.recorder.add(self.drawer.shown_image(self.viewer))
             self.frame_count += 1
             if self.frames_left is not None and self.frame_count >= self.frames_left \
-                    and not self.actions:
+                    and not self.actions and self.turntable is None:
                 self._finish()
         except BaseException as err:
             self._fail(err)
@@ -272,6 +274,23 @@ class Window:
                 self._markers()
         except BaseException as err:
             self._fail(err)
+
+    def start_turntable(self, path, frames: int) -> None:
+        """Record one turn of the camera about its pivot to ``path`` (.mp4 or .gif), one
+        full-resolution frame per window frame; the camera comes back where it was."""
+        self.turntable = Turntable(path, self.viewer.camera, frames)
+
+    def _turn(self) -> None:
+        turntable, viewer = self.turntable, self.viewer
+        viewer.camera = turntable.next_camera()
+        turntable.add(self.drawer.image(viewer))
+        if turntable.finished:
+            viewer.camera = turntable.start
+            self.turntable = None
+            try:
+                viewer.status = f"saved {turntable.finish()}"
+            except (MarchlabError, OSError) as err:
+                viewer.status = f"not saved: {err}"
 
     def _finish(self) -> None:
         from imgui_bundle import hello_imgui
@@ -295,20 +314,19 @@ class Window:
             x, y = io.mouse_pos.x, io.mouse_pos.y
             if imgui.is_mouse_clicked(imgui.MouseButton_.left):
                 self._press = (x, y)
-                self._mouse_on_ball = viewer.grab_ball(x, y)
+                viewer.press(x, y, shift=io.key_shift)
             for button, name in ((imgui.MouseButton_.left, "left"),
                                  (imgui.MouseButton_.right, "right"),
                                  (imgui.MouseButton_.middle, "middle")):
                 if imgui.is_mouse_dragging(button, 1.0):
-                    if name == "left" and self._mouse_on_ball:
-                        viewer.drag_ball(x, y)
+                    if name == "left" and viewer.holding is not None:
+                        viewer.move_to(x, y)
                     else:
                         viewer.drag(name, io.mouse_delta.x, io.mouse_delta.y)
             if imgui.is_mouse_released(imgui.MouseButton_.left):
-                if self._mouse_on_ball:
-                    viewer.release_ball()
-                    self._mouse_on_ball = False
-                elif math.dist(self._press, (x, y)) < 2:       # a click, not a drag
+                held = viewer.holding
+                viewer.let_go()
+                if held is None and math.dist(self._press, (x, y)) < 2:   # a click
                     self._click(x, y)
             if io.mouse_wheel:
                 viewer.scroll(io.mouse_wheel)
@@ -361,15 +379,21 @@ class Window:
         if self.viewer.check is not None or self.viewer.check_progress is not None:
             self._panel("Check against the reference", self._check_panel)
 
-    @staticmethod
-    def _panel(title: str, draw, position=None, size=None) -> None:
-        """One ImGui window, placed at ``position`` with ``size`` when first shown."""
+    def _panel(self, title: str, draw, position=None, size=None) -> None:
+        """One ImGui window, placed at ``position`` with ``size`` when first shown, and
+        kept inside the view: a panel pushed past its edge by a smaller window (or by the
+        person) comes back, shrunk to fit if it must."""
         from imgui_bundle import imgui
         if position is not None:
             imgui.set_next_window_pos(position, imgui.Cond_.first_use_ever)
             imgui.set_next_window_size(size, imgui.Cond_.first_use_ever)
         if imgui.begin(title)[0]:
             draw()
+        (x, y), (w, h) = imgui.get_window_pos(), imgui.get_window_size()
+        fitted = panel_inside((x, y, w, h), self.viewer.size)
+        if fitted != (x, y, w, h):
+            imgui.set_window_pos(fitted[:2])
+            imgui.set_window_size(fitted[2:])
         imgui.end()
 
     def _menu(self) -> None:
@@ -412,6 +436,20 @@ class Window:
                 except (MarchlabError, OSError) as err:
                     viewer.status = f"not saved: {err}"
                 self.recorder = None
+            if self.turntable is None:
+                if imgui.button("Turntable"):
+                    try:
+                        self.start_turntable(self.record_path, self.turntable_frames)
+                    except MarchlabError as err:
+                        viewer.status = f"cannot record: {err}"
+                imgui.same_line()
+                imgui.set_next_item_width(90)
+                _, self.turntable_frames = imgui.input_int("frames##turntable",
+                                                           self.turntable_frames)
+                self.turntable_frames = min(max(self.turntable_frames, 2), 3600)
+            else:
+                done = len(self.turntable.recorder.frames) / len(self.turntable.cameras)
+                imgui.progress_bar(done, (200, 0), "turntable")
             imgui.end_menu()
         if imgui.begin_menu("Edit"):
             if imgui.menu_item("Undo", "Ctrl+Z", False, viewer.history.can_undo)[0]:
@@ -510,8 +548,7 @@ class Window:
         if imgui.begin_drag_drop_target():
             if imgui.accept_drag_drop_payload_py_id("node") is not None \
                     and getattr(self, "_dragged", None) is not None:
-                self.viewer.select(self._dragged)
-                self.viewer.reparent_selected(path)
+                self.viewer.reparent(self._dragged, path)
                 self._dragged = None
             imgui.end_drag_drop_target()
         if opened:
@@ -577,6 +614,7 @@ class Window:
         elif isinstance(value, float):
             speed = max(abs(value) * 0.01, 1e-4)
             changed, new = imgui.drag_float(label, value, speed, format="%.6g")
+            new = float32_value(new)
         elif isinstance(value, tuple) and len(value) == 3 and all(
                 isinstance(v, float) for v in value):
             if check is color_range:
@@ -584,7 +622,9 @@ class Window:
             else:
                 speed = max(max(abs(v) for v in value) * 0.01, 1e-3)
                 changed, new = imgui.drag_float3(label, list(value), speed, format="%.4g")
-            new = tuple(float(v) for v in new)
+            # Components not touched keep their exact value; a touched one is float32's.
+            new = tuple(old if np.float32(old) == np.float32(v) else float32_value(v)
+                        for old, v in zip(value, new))
         elif isinstance(value, str):
             changed, new = imgui.input_text(label, value)
         else:
@@ -621,20 +661,22 @@ class Window:
             playback.reset()
         imgui.same_line()
         if imgui.button("Kick"):
-            playback.kick(1.0, seed=playback.steps)
+            playback.kick(1.0)           # the session's generator: each kick differs
         imgui.text(f"t = {playback.time:.3f} s, {playback.steps} steps")
         changed, scale = imgui.slider_float("time scale", playback.time_scale, 0.1, 4.0)
         if changed:
             playback.time_scale = scale
         settings = playback.settings
-        changed, gravity = imgui.drag_float3("gravity (m/s^2)", list(settings.gravity), 0.05)
+        changed, gravity = imgui.drag_float3("gravity (m s^-2)", list(settings.gravity), 0.05)
         if changed:
-            self._guarded(playback.set_gravity, tuple(gravity))
+            self._guarded(playback.set_gravity, tuple(
+                old if np.float32(old) == np.float32(new) else float32_value(new)
+                for old, new in zip(settings.gravity, gravity)))
         for name, setter in (("restitution", playback.set_restitution),
                              ("friction", playback.set_friction)):
             changed, value = imgui.slider_float(name, getattr(settings, name), 0.0, 1.0)
             if changed:
-                self._guarded(setter, value)
+                self._guarded(setter, float32_value(value))
         history = np.asarray(playback.history, np.float64)
         if len(history) > 1 and implot.begin_plot("energy and momentum", (-1, 120)):
             implot.plot_line("energy (J)", history[:, 0].copy(), history[:, 1].copy())
@@ -651,6 +693,14 @@ class Window:
         _, viewer.resolution_scale = imgui.slider_float("resolution", viewer.resolution_scale,
                                                         0.1, 1.0)
         _, viewer.refine = imgui.checkbox("reduced resolution while moving", viewer.refine)
+        if viewer.refine:
+            _, viewer.adapt = imgui.checkbox(f"adapt it to {TARGET_FPS:.0f} fps", viewer.adapt)
+            imgui.same_line()
+            _, viewer.moving_scale = imgui.slider_float("moving scale", viewer.moving_scale,
+                                                        MOVING_SCALES[0], MOVING_SCALES[-1])
+        if self.drawer.compiling:
+            imgui.text_colored((1.0, 0.8, 0.3, 1.0), "compiling the edited scene's shader; "
+                               "showing the last one until it is ready")
         times = np.asarray(viewer.frame_times, np.float64) * 1e3
         if len(times) > 1 and implot.begin_plot("frame time (ms)", (-1, 90)):
             implot.plot_line("ms", times)
@@ -703,24 +753,31 @@ class Window:
         return self.textures[name][1]
 
     def _markers(self) -> None:
-        """Each light as a small marker where it is (directional lights at the edge of the
-        view, toward where they shine from), and each body's index when grabbed."""
+        """Each light as a small marker: a point or spot light where it is (drag the marker
+        to move it: `Viewer.press`), a directional one at the edge of the view, toward where
+        it shines from."""
         from imgui_bundle import imgui
         from scene_model.camera import project
         viewer = self.viewer
         draw = imgui.get_background_draw_list()
         width, height = viewer.size
-        for i, light in enumerate(viewer.history.scene.lights):
-            position = getattr(light, "position", None)
-            if position is None:
-                direction = np.asarray(getattr(light, "direction", (0, -1, 0)), np.float64)
-                position = np.asarray(viewer.camera.look_at) - 1e3 * direction
-            x, y, depth = project(viewer.camera, [position], width, height)[0]
+        lights = viewer.history.scene.lights
+        colour = imgui.get_color_u32((1.0, 0.9, 0.2, 1.0))
+        held = imgui.get_color_u32((1.0, 1.0, 1.0, 1.0))
+        for i, x, y in viewer.light_markers():
+            draw.add_circle_filled((x, y), MARKER_RADIUS - 2, colour)
+            draw.add_circle((x, y), MARKER_RADIUS, held if viewer.holding == "light" else colour)
+            draw.add_text((x + MARKER_RADIUS + 2, y - 8), colour, f"{lights[i].kind} {i}")
+        for i, light in enumerate(lights):
+            direction = getattr(light, "direction", None)
+            if getattr(light, "position", None) is not None or direction is None:
+                continue
+            far = np.asarray(viewer.camera.look_at) - 1e3 * np.asarray(direction, np.float64)
+            x, y, _ = project(viewer.camera, [far], width, height)[0]
             if not math.isfinite(x):
                 continue
             x, y = min(max(x, 8), width - 8), min(max(y, 28), height - 8)
-            colour = imgui.get_color_u32((1.0, 0.9, 0.2, 1.0))
-            draw.add_circle_filled((x, y), 6, colour)
+            draw.add_triangle_filled((x, y - 6), (x - 6, y + 5), (x + 6, y + 5), colour)
             draw.add_text((x + 8, y - 8), colour, f"{light.kind} {i}")
 
 
@@ -731,14 +788,38 @@ class _Gl:
         self.window = window
 
     def object_id_at(self, x, y) -> int:
-        self.window.drawer.update(self.window.viewer)
+        self.window.drawer.update(self.window.viewer, wait=True)   # pick what the scene has
         return self.window.drawer.object_id_at(self.window.viewer, x, y)
 
     def screenshot(self, path) -> None:
         self.window.drawer.screenshot(self.window.viewer, path)
 
+    def turntable(self, path, frames: int) -> None:
+        self.window.start_turntable(path, frames)
+
 
 _UNCHANGED = object()
+
+
+MENU_BAR = 20        # pixels at the top of the window that the menu bar takes
+
+
+def panel_inside(rectangle, view_size) -> tuple[float, float, float, float]:
+    """``rectangle`` (x, y, width, height) of a panel moved, and shrunk where it must be,
+    so that it lies inside a view of ``view_size`` (width, height) below the menu bar."""
+    x, y, width, height = rectangle
+    view_width, view_height = view_size
+    width = min(width, view_width)
+    height = min(height, view_height - MENU_BAR)
+    x = min(max(x, 0), view_width - width)
+    y = min(max(y, MENU_BAR), view_height - height)
+    return (x, y, width, height)
+
+
+def float32_value(value) -> float:
+    """A value an ImGui float widget returned (a float32) as the shortest decimal that is
+    the same float32: a typed 0.004 is stored as 0.004, not 0.004000000189989805."""
+    return float(str(np.float32(value)))
 
 
 def _editable(record) -> list[tuple[str, object]]:
@@ -772,6 +853,7 @@ def runner_params(window: Window, size, title: str):
     params.callbacks.post_init = window.post_init
     params.callbacks.custom_background = window.background
     params.callbacks.show_gui = window.gui
+    params.callbacks.before_exit = window.before_exit
     # No full-window ImGui window over the view: the mouse on the view is the camera's.
     params.imgui_window_params.default_imgui_window_type = \
         hello_imgui.DefaultImGuiWindowType.no_default_window
@@ -793,6 +875,14 @@ def run(window: Window, size, title: str = "marchlab view", test=None) -> None:
         testing.run(test_function=test, runner_params=params, add_ons_params=add_ons)
     if window.error is not None:
         raise window.error
+
+
+def background_compiler():
+    """A `gpu_shader.background_compile.BackgroundCompiler` whose headless context is
+    moderngl's default one, which takes the window's driver path (GLX on X11), so that the
+    driver caches programs under the keys the window's context looks up."""
+    from gpu_shader.background_compile import BackgroundCompiler
+    return BackgroundCompiler(backend=None)
 
 
 def window_problem() -> str | None:

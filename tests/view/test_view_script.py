@@ -59,11 +59,16 @@ wait = 3
 screenshot = "a.png"
 [[action]]
 save = "b.toml"
+[[action]]
+turntable = "spin.gif"
+frames = 12
 """))
     verbs = [a.verb for a in actions]
     assert verbs == ["scroll", "keys", "set", "click", "overlay", "add", "delete", "undo",
-                     "redo", "physics", "wait", "wait", "wait", "screenshot", "save"]
+                     "redo", "physics", "wait", "wait", "wait", "screenshot", "save",
+                     "turntable"]
     assert actions[1].arguments == {"keys": "WQ", "seconds": 0.25, "fast": True}
+    assert actions[-1].arguments == {"path": "spin.gif", "frames": 12}
 
 
 @pytest.mark.parametrize("text, problem", [
@@ -72,6 +77,7 @@ save = "b.toml"
     ('[[action]]\ndrag = "left"\nfrom = [1, 2]', "drag: to: expected [x, y]"),
     ('[[action]]\ndrag = "thumb"\nfrom = [1, 2]\nto = [3, 4]', "button 'thumb'"),
     ('[[action]]\ndrag = "left"\nfrom = [1, 2]\nto = [3, 4]\nspeed = 2', "unknown key 'speed'"),
+    ('[[action]]\ndrag = "left"\nfrom = [1, 2]\nto = [3, 4]\nshift = 1', "shift: write true"),
     ('[[action]]\nkeys = "WX"', "is not a string of WSDAEQ"),
     ('[[action]]\nkeys = "W"\nseconds = -1', "seconds must be in (0, 60]"),
     ('[[action]]\nset = "render.epsilon"', "needs a field path"),
@@ -81,6 +87,8 @@ save = "b.toml"
     ('[[action]]\nscreenshot = "a.jpg"', "a screenshot is a .png"),
     ('[[action]]\nsave = "a.json"', "must end in .toml"),
     ('[[action]]\ndelete = 1', "write delete = true"),
+    ('[[action]]\nturntable = "spin.avi"', "a recording is an .mp4 or a .gif"),
+    ('[[action]]\nturntable = "spin.gif"\nframes = 1', "frames: expected a whole number from 2"),
     ('[scene]\nx = 1', "unknown table 'scene'"),
     ('[[action]\n', "not a TOML script"),
 ])

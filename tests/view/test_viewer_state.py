@@ -11,9 +11,10 @@ import numpy as np
 import pytest
 
 from marchlab import camera_control
-from marchlab.view import MOVING_SCALE, SETTLE_SECONDS, Viewer
+from marchlab.view import (MOVING_SCALE, MOVING_SCALES, SETTLE_SECONDS, TARGET_FPS, Viewer,
+                          adapt_moving_scale)
 from scene_model import editing
-from scene_model.camera import pixel_ray, project
+from scene_model.camera import camera_basis, pixel_ray, project
 from scene_model.errors import MarchlabError
 from scene_model.scene import rendered_scene, scene_at
 from scene_model.scenefile import load_scene, scene_to_toml
@@ -94,6 +95,77 @@ def test_render_size_is_resolution_scale_of_each_side(viewer):
     assert viewer.render_size() == (320, 240)
     viewer.drag("left", 3, 4)
     assert viewer.render_size() == (round(320 * MOVING_SCALE), round(240 * MOVING_SCALE))
+
+
+def _settle(frame_seconds, fixed=0.0, frames=40, scale=MOVING_SCALE):
+    """The moving scales ``frames`` frames in a row take, each frame costing
+    ``frame_seconds(scale)``, with ``fixed`` known as the frame's fixed part."""
+    scales = []
+    for _ in range(frames):
+        scale = adapt_moving_scale(scale, frame_seconds(scale), fixed)
+        scales.append(scale)
+    return scales
+
+
+FIXED = 0.015     # a frame's fixed part (panels, display, swap) in these models
+
+
+def _frame_model(full_frame_ms):
+    """A frame: the fixed part plus a render that grows with the picture's area, taking
+    ``full_frame_ms`` in all at scale 1."""
+    return lambda scale: FIXED + (full_frame_ms / 1e3 - FIXED) * scale ** 2
+
+
+@pytest.mark.parametrize("full_frame_ms", [60.0, 200.0, 400.0])
+@pytest.mark.parametrize("start", [MOVING_SCALES[0], MOVING_SCALE, MOVING_SCALES[-1]])
+def test_adapt_moving_scale_knowing_the_fixed_part_settles_on_the_finest_step_within_30_fps(
+        full_frame_ms, start):
+    cost = _frame_model(full_frame_ms)
+    scales = _settle(cost, fixed=FIXED, scale=start)
+    fitting = [s for s in MOVING_SCALES if cost(s) <= 1 / TARGET_FPS]
+    assert set(scales[-10:]) == {fitting[-1]}
+
+
+@pytest.mark.parametrize("full_frame_ms", [60.0, 200.0, 400.0])
+@pytest.mark.parametrize("start", [MOVING_SCALES[0], MOVING_SCALE, MOVING_SCALES[-1]])
+def test_adapt_moving_scale_not_knowing_the_fixed_part_settles_within_30_fps(full_frame_ms,
+                                                                             start):
+    cost = _frame_model(full_frame_ms)
+    scales = _settle(cost, fixed=0.0, scale=start)
+    assert len(set(scales[-10:])) == 1                     # steady, no flicker
+    assert cost(scales[-1]) <= 1 / TARGET_FPS
+
+
+def test_adapt_moving_scale_stays_at_the_coarsest_step_when_nothing_keeps_the_rate():
+    assert _settle(lambda scale: 0.1)[-1] == MOVING_SCALES[0]
+
+
+def test_adapt_moving_scale_steps_up_only_when_the_area_model_says_the_next_step_fits():
+    # At 0.3, 25 ms: 0.35 would take 25 * (0.35 / 0.3)**2 = 34 ms > 33.3 ms: stay.
+    assert adapt_moving_scale(0.3, 0.025) == 0.3
+    assert adapt_moving_scale(0.3, 0.024) == 0.35             # 32.7 ms: step up
+    assert adapt_moving_scale(0.3, 0.034) == 0.25             # missed 30 fps: step down
+
+
+def test_frames_drawn_moving_adapt_the_viewers_moving_scale_and_others_do_not(viewer):
+    viewer.record_frame_time(0.2, drew=True, drew_moving=False)
+    assert viewer.moving_scale == MOVING_SCALE
+    viewer.record_frame_time(0.2, drew_moving=True)
+    assert viewer.moving_scale < MOVING_SCALE
+    viewer.adapt = False
+    viewer.record_frame_time(0.2, drew_moving=True)
+    assert viewer.moving_scale == MOVING_SCALES[MOVING_SCALES.index(MOVING_SCALE) - 1]
+
+
+def test_frames_that_render_nothing_tell_the_adaptation_the_frames_fixed_part(viewer):
+    # At 0.35, 30 ms a frame: with nothing known of the fixed part, 0.4 would be predicted
+    # at 30 * (0.4 / 0.35)**2 = 39 ms (stay); with 20 ms of it fixed, at 33.1 ms (step up).
+    viewer.record_frame_time(0.030, drew_moving=True)
+    assert viewer.moving_scale == 0.35
+    for seconds in (0.025, 0.020, 0.022):
+        viewer.record_frame_time(seconds, drew=False)
+    viewer.record_frame_time(0.030, drew_moving=True)
+    assert viewer.moving_scale == 0.4
 
 
 # --- the camera --------------------------------------------------------------------------
@@ -374,6 +446,90 @@ def test_drag_ball_puts_the_body_on_the_ray_through_the_new_pixel_within_1e_6(bo
 def test_grab_ball_on_empty_sky_returns_false(bodies_viewer):
     assert bodies_viewer.grab_ball(SIZE[0] / 2, 1.0) is False   # top row: sky above the balls
     assert bodies_viewer.playback._held is None
+
+
+def test_a_press_on_a_bodys_centre_takes_hold_of_the_ball(bodies_viewer):
+    x, y, _ = project(bodies_viewer.camera, [bodies_viewer.playback.positions()[0]], *SIZE)[0]
+    assert bodies_viewer.press(x, y) == "ball" and bodies_viewer.holding == "ball"
+    bodies_viewer.let_go()
+    assert bodies_viewer.holding is None
+
+
+# --- dragging lights and objects in the view ---------------------------------------------
+
+def _marker(viewer, index=0):
+    return next((x, y) for i, x, y in viewer.light_markers() if i == index)
+
+
+def _forward_depth(viewer, point):
+    forward = camera_basis(viewer.camera)[0]
+    return float((np.asarray(point) - np.asarray(viewer.camera.position)) @ forward)
+
+
+def test_light_markers_are_where_the_lights_project(viewer):
+    for i, x, y in viewer.light_markers():
+        expected = project(viewer.camera, [viewer.scene.lights[i].position], *SIZE)[0]
+        assert (x, y) == pytest.approx(tuple(expected[:2]), abs=1e-9)
+
+
+def test_a_drag_from_a_lights_marker_keeps_the_light_under_the_cursor_within_1e_6_px(viewer):
+    x, y = _marker(viewer)
+    before = viewer.scene.lights[0].position
+    assert viewer.press(x + 3, y - 2) == "light"            # within the marker's radius
+    viewer.move_to(x + 43, y + 23)
+    after = viewer.scene.lights[0].position
+    moved = project(viewer.camera, [after], *SIZE)[0]
+    assert tuple(moved[:2]) == pytest.approx((x + 40, y + 25), abs=1e-6)
+    # It moved in the plane facing the camera: its depth along the view is unchanged.
+    assert _forward_depth(viewer, after) == pytest.approx(_forward_depth(viewer, before),
+                                                          abs=1e-9)
+
+
+def test_a_whole_drag_is_one_undo_step_and_the_next_drag_another(viewer):
+    x, y = _marker(viewer)
+    start = viewer.scene.lights[0].position
+    viewer.press(x, y)
+    for k in range(1, 6):
+        viewer.move_to(x + 10 * k, y)
+    viewer.let_go()
+    first = viewer.scene.lights[0].position
+    x, y = _marker(viewer)
+    viewer.press(x, y)
+    viewer.move_to(x, y + 30)
+    viewer.let_go()
+    viewer.undo()
+    assert viewer.scene.lights[0].position == pytest.approx(first, abs=1e-12)
+    viewer.undo()
+    assert viewer.scene.lights[0].position == pytest.approx(start, abs=1e-12)
+
+
+def test_shift_drag_moves_the_selected_object_so_its_centre_follows_the_cursor(viewer):
+    viewer.select((1,))                          # a sphere inside a translate
+    centre = editing.get_field(viewer.scene, "objects[1].position")
+    x, y, _ = project(viewer.camera, [centre], *SIZE)[0]
+    assert viewer.press(x, y, shift=True) == "object"
+    viewer.move_to(x - 30, y + 12)
+    viewer.let_go()
+    moved = editing.get_field(viewer.scene, "objects[1].position")
+    assert tuple(project(viewer.camera, [moved], *SIZE)[0][:2]) == \
+        pytest.approx((x - 30, y + 12), abs=1e-6)
+    viewer.undo()
+    assert editing.get_field(viewer.scene, "objects[1].position") == pytest.approx(centre)
+
+
+def test_shift_drag_of_an_object_without_a_position_gives_it_one(viewer):
+    viewer.select((0,))                          # the floor plane: no translate
+    assert editing.get_field(viewer.scene, "objects[0].position") is None
+    assert viewer.press(320, 400, shift=True) == "object"
+    viewer.move_to(320, 380)
+    assert editing.get_field(viewer.scene, "objects[0].position") is not None
+
+
+def test_a_press_on_nothing_holds_nothing_so_the_drag_orbits(viewer):
+    assert viewer.press(SIZE[0] / 2, 1.0) is None              # sky, no marker, no shift
+    assert viewer.press(SIZE[0] / 2, 1.0, shift=True) is None  # shift, but nothing selected
+    viewer.move_to(10, 10)                                     # carries nothing
+    assert not viewer.modified
 
 
 # --- checking against the reference ------------------------------------------------------
