@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -21,6 +22,9 @@ from marchlab.view_window import Window, run
 SIZE = (160, 120)        # a view for image checks
 PANEL_SIZE = (780, 560)  # room for the panels and free space between them, inside the
                          # 800x600 screen Xvfb has by default
+CHECK_SIZE = (340, 240)  # room for the Render panel's button; the NumPy reference of a view
+                         # this size takes about a second
+WAIT_SECONDS = 30        # for what takes frames of its own: a playing clock, a check
 
 
 class ScreenWindow(Window):
@@ -103,6 +107,153 @@ def drive(out: Path) -> None:
     run(Window(viewer), PANEL_SIZE, test=moves)
     viewer.save(out / "edited.toml")
     _state(out, **seen)
+
+
+def undo_redo(out: Path) -> None:
+    """Set epsilon in the Render panel, undo and redo it with the Edit menu and with Ctrl+Z
+    / Ctrl+Shift+Z, then Add an object and undo that: epsilon and the objects after each."""
+    from imgui_bundle import imgui
+    viewer = Viewer("classroom", PANEL_SIZE)
+    viewer.resolution_scale = 0.25
+    seen = {}
+    undo_key = imgui.Key.mod_ctrl | imgui.Key.z
+    redo_key = imgui.Key.mod_ctrl | imgui.Key.mod_shift | imgui.Key.z
+
+    def epsilon(key):
+        seen[key] = viewer.history.scene.render.epsilon
+
+    def steps(ctx):
+        epsilon("at the start")
+        ctx.set_ref("//Render")
+        ctx.item_input_value("epsilon##render", 0.004)
+        epsilon("after the edit")
+        ctx.menu_click("//##MainMenuBar/Edit/Undo")
+        epsilon("after Edit > Undo")
+        ctx.menu_click("//##MainMenuBar/Edit/Redo")
+        epsilon("after Edit > Redo")
+        ctx.key_press(undo_key)
+        ctx.yield_(2)
+        epsilon("after Ctrl+Z")
+        ctx.key_press(redo_key)
+        ctx.yield_(2)
+        epsilon("after Ctrl+Shift+Z")
+        seen["objects before add"] = _kinds(viewer.history.scene.objects)
+        ctx.set_ref("//Scene")
+        ctx.combo_click("new/torus")
+        ctx.item_click("Add")
+        seen["objects after add"] = _kinds(viewer.history.scene.objects)
+        ctx.menu_click("//##MainMenuBar/Edit/Undo")
+        seen["objects after undo"] = _kinds(viewer.history.scene.objects)
+
+    run(Window(viewer), PANEL_SIZE, test=steps)
+    viewer.save(out / "edited.toml")
+    _state(out, **seen)
+
+
+def reparent(out: Path) -> None:
+    """Drag the torus's branch of "csg" onto the smooth union in the object tree."""
+    viewer = Viewer("csg", PANEL_SIZE)
+    viewer.resolution_scale = 0.25
+    seen = {}
+
+    def drag(ctx):
+        seen["objects before"] = _kinds(viewer.history.scene.objects)
+        ctx.set_ref("//Scene/scene tabs/Objects")
+        ctx.item_drag_and_drop("translate##(3,)", "translate##(2,)/smooth_union##(2, 0)")
+        ctx.yield_(2)
+        seen["objects after"] = _kinds(viewer.history.scene.objects)
+        seen["selection"] = list(viewer.selection or ())
+        # A primitive holds no children: dropping onto the floor plane moves nothing.
+        ctx.item_drag_and_drop("translate##(3,)", "plane (floor)##(0,)")
+        ctx.yield_(2)
+        seen["objects after a refused drop"] = _kinds(viewer.history.scene.objects)
+        seen["selection after a refused drop"] = list(viewer.selection or ())
+        seen["status"] = viewer.status
+
+    run(Window(viewer), PANEL_SIZE, test=drag)
+    viewer.save(out / "edited.toml")
+    _state(out, **seen)
+
+
+def physics(out: Path) -> None:
+    """Step, play, pause and reset "bounce" with the Physics panel's buttons, set restitution
+    and gravity with its sliders and Kick: the playback after each."""
+    viewer = Viewer("bounce", PANEL_SIZE)
+    viewer.resolution_scale = 0.25
+    seen = {}
+
+    def state(key):
+        playback = viewer.playback
+        seen[key] = {"time": playback.time, "steps": playback.steps,
+                     "playing": playback.playing,
+                     "positions": playback.positions().tolist(),
+                     "velocities": playback.world.velocity.tolist()}
+
+    def buttons(ctx):
+        # The panel reaches below a 560-pixel window: the test engine moves it up to reach
+        # the sliders, as a person would drag it.
+        ctx.set_ref("//Physics")
+        state("at the start")
+        ctx.item_click("Step")
+        state("after Step")
+        ctx.yield_(5)
+        state("5 frames after Step")
+        ctx.item_click("Play")
+        _yield_until(ctx, lambda: viewer.playback.steps > 5)
+        state("while playing")
+        ctx.item_click("Pause")
+        state("after Pause")
+        ctx.yield_(5)
+        state("5 frames after Pause")
+        ctx.item_click("Reset")
+        state("after Reset")
+        ctx.item_input_value("restitution", 0.25)
+        world = viewer.playback.world
+        seen["restitution"] = {"settings": viewer.playback.settings.restitution,
+                               "bodies": world.restitution.tolist(),
+                               "planes": world.plane_restitution.tolist()}
+        ctx.item_input_value("gravity (m s^-2)/$$1", -4.0)     # its y component
+        seen["gravity"] = {"settings": list(viewer.playback.settings.gravity),
+                           "world": world.gravity.tolist()}
+        ctx.item_click("Kick")
+        state("after Kick")
+
+    run(Window(viewer), PANEL_SIZE, test=buttons)
+    _state(out, **seen)
+
+
+def reference_check(out: Path) -> None:
+    """Press "Check against the reference" on a small view and wait for its verdict."""
+    viewer = Viewer("classroom", CHECK_SIZE)
+    seen = {}
+
+    def press(ctx):
+        ctx.set_ref("//Render")
+        ctx.item_click("Check against the reference")
+        _yield_until(ctx, lambda: viewer.check is not None)   # the reference renders in a thread
+        ctx.yield_(2)                                          # and the panel shows its verdict
+        seen["size"] = list(viewer.size)
+
+    run(Window(viewer), CHECK_SIZE, test=press)
+    if viewer.check is None:
+        raise SystemExit(f"no verdict within {WAIT_SECONDS} s")
+    result = viewer.check
+    np.savez(out / "result.npz", reference=result.reference, gpu=result.gpu,
+             difference=result.difference)
+    _state(out, failures=result.failures, **seen)
+
+
+def _yield_until(ctx, done) -> None:
+    """Let frames pass until ``done()``, for at most WAIT_SECONDS."""
+    deadline = time.monotonic() + WAIT_SECONDS
+    while not done() and time.monotonic() < deadline:
+        ctx.yield_()
+
+
+def _kinds(nodes) -> list:
+    """The kinds in a tree of nodes, nested as the tree is: [kind, [children...]]."""
+    from scene_model.shapes import children
+    return [[node.kind, _kinds(children(node))] for node in nodes]
 
 
 def _state(out: Path, **values) -> None:
