@@ -109,22 +109,39 @@ def overlay_image(frame, aov: str = "color", selected=(),
 
 # --- the pass on the GPU --------------------------------------------------------------------
 
+def display_source(aov: str, outline: bool) -> str:
+    """The display pass's fragment shader for one overlay, with or without the selection's
+    outline (``glsl/display.frag`` filled in: only that overlay's code is in it)."""
+    if aov not in OVERLAYS:
+        raise MarchlabError(f"unknown overlay {aov!r} (one of: {', '.join(OVERLAYS)})")
+    return fill_template("display.frag", overlay=aov, outline=outline,
+                         heat_stop_count=len(HEAT_STOPS), max_selected=MAX_SELECTED)
+
+
 class Display:
-    """The display program on one moderngl context, and offscreen targets for `image`."""
+    """The display programs on one moderngl context (one per overlay and outline, made when
+    first drawn), and offscreen targets for `image`."""
 
     def __init__(self, ctx):
         self.ctx = ctx
-        source = fill_template("display.frag", overlays=OVERLAYS,
-                               heat_stop_count=len(HEAT_STOPS), max_selected=MAX_SELECTED)
-        with ctx:
-            self.program = ctx.program(vertex_shader=glsl_file("fullscreen.vert"),
-                                       fragment_shader=source)
-            self.vao = ctx.vertex_array(self.program, [])
-            for unit, name in enumerate(("color_hit", "normal_depth", "steps_id")):
-                self.program[name].value = unit
-            self.program["heat_stops"].write(HEAT_STOPS.astype(np.float32).tobytes())
-            self.program["heat_colors"].write(HEAT_COLORS.astype(np.float32).tobytes())
+        self.programs: dict[tuple[str, bool], tuple] = {}
         self.offscreen: dict[tuple[int, int], object] = {}
+
+    def _program(self, aov: str, outline: bool):
+        """(program, vertex array) for ``aov`` with or without the outline; the context is
+        current."""
+        key = (aov, outline)
+        if key not in self.programs:
+            program = self.ctx.program(vertex_shader=glsl_file("fullscreen.vert"),
+                                       fragment_shader=display_source(aov, outline))
+            for unit, name in enumerate(("color_hit", "normal_depth", "steps_id")):
+                if name in program:
+                    program[name].value = unit
+            if "heat_stops" in program:
+                program["heat_stops"].write(HEAT_STOPS.astype(np.float32).tobytes())
+                program["heat_colors"].write(HEAT_COLORS.astype(np.float32).tobytes())
+            self.programs[key] = (program, self.ctx.vertex_array(program, []))
+        return self.programs[key]
 
     def draw(self, target, aov: str = "color", *, gamma: float = 2.2, max_steps: int = 256,
              depth_range: tuple[float, float] = (0.0, 1.0), selected=(),
@@ -159,16 +176,18 @@ class Display:
         if len(ids) > MAX_SELECTED:
             raise MarchlabError(f"{len(ids)} objects selected; the outline follows at most "
                                 f"{MAX_SELECTED}")
-        program = self.program
         with self.ctx:
-            program["overlay"].value = OVERLAYS.index(aov)
-            program["gamma"].value = float(gamma)
-            program["max_steps"].value = float(max_steps)
-            program["depth_range"].value = tuple(float(d) for d in depth_range)
-            padded = np.resize(np.array(ids + [-1], np.int32), MAX_SELECTED)   # the array's size
-            program["selected"].write(padded.tobytes())
-            program["selected_count"].value = len(ids)
-            program["outline_color"].value = tuple(float(c) for c in outline)
+            program, vao = self._program(aov, outline=bool(ids))
+            values = {"gamma": float(gamma), "max_steps": float(max_steps),
+                      "depth_range": tuple(float(d) for d in depth_range),
+                      "selected_count": len(ids),
+                      "outline_color": tuple(float(c) for c in outline)}
+            for name, value in values.items():
+                if name in program:              # each program has only what it uses
+                    program[name].value = value
+            if "selected" in program:
+                padded = np.resize(np.array(ids + [-1], np.int32), MAX_SELECTED)
+                program["selected"].write(padded.tobytes())
             for unit, texture in enumerate(_planes(target)):
                 texture.use(location=unit)
             previous = self.ctx.viewport
@@ -176,9 +195,26 @@ class Display:
                 self.ctx.viewport = viewport
             program["viewport"].value = tuple(int(v) for v in self.ctx.viewport)
             try:
-                self.vao.render(vertices=3)
+                vao.render(vertices=3)
             finally:
                 self.ctx.viewport = previous
+
+    def warm(self, framebuffer, aov: str = "color", outline: bool = True) -> None:
+        """Make the program for ``aov`` (with the outline or not) and draw it once, into one
+        pixel of ``framebuffer``, so that a driver which compiles at the first draw
+        (llvmpipe: about 0.1 s, for each format of framebuffer drawn into) has done so
+        before a live view needs it, e.g. on the click that first selects an object. The
+        pixel is left for the caller's next clear."""
+        with self.ctx:
+            # 3 x 3: a driver may compile apart for power-of-two sizes (llvmpipe does).
+            planes = [self.ctx.texture((3, 3), 4, dtype=dtype) for dtype in ("f4", "f4", "i4")]
+            framebuffer.use()
+        try:
+            self.draw(planes, aov, selected=(0,) if outline else (), viewport=(0, 0, 1, 1))
+        finally:
+            with self.ctx:
+                for texture in planes:
+                    texture.release()
 
     def image(self, target, aov: str = "color", **settings) -> np.ndarray:
         """The picture `draw` makes, at the target's size, as an (H, W, 3) uint8 array, top

@@ -181,6 +181,20 @@ def test_each_pixel_shows_the_texel_under_its_centre_at_a_1_5x_enlargement(gpu):
     np.testing.assert_array_equal(picture, small[rows][:, columns])
 
 
+@pytest.mark.parametrize("window", [(641, 479), (1000, 750), (97, 71)])
+def test_the_texel_under_each_pixels_centre_is_exact_at_awkward_ratios(gpu, window):
+    # The shader divides in floats and corrects by one (floor_divide): it must agree with
+    # the integer floor((2 column + 1) W / (2 w)) at any ratio, including those where the
+    # quotient is a whole number and a driver's approximate division could land below it.
+    _, target = draw(gpu, "classroom", 37, 23)
+    small = gpu[1].image(target, "object_id")
+    width, height = window
+    picture = draw_in_window(gpu, target, window, (0, 0, width, height), aov="object_id")
+    rows = (2 * np.arange(height) + 1) * 23 // (2 * height)
+    columns = (2 * np.arange(width) + 1) * 37 // (2 * width)
+    np.testing.assert_array_equal(picture, small[rows][:, columns])
+
+
 def test_draw_leaves_the_viewport_and_image_the_bound_framebuffer_as_they_were(gpu):
     renderer, display = gpu
     frame, target = draw(gpu, "classroom")
@@ -194,3 +208,22 @@ def test_draw_leaves_the_viewport_and_image_the_bound_framebuffer_as_they_were(g
     with ctx:
         assert ctx.fbo is window and ctx.viewport == (1, 2, 30, 40)
         window.release()
+
+
+def test_warm_makes_the_program_and_draws_only_the_corner_pixel(gpu):
+    from gpu_shader.display import Display
+    renderer, _ = gpu
+    ctx = renderer.ctx
+    display = Display(ctx)
+    with ctx:
+        window = ctx.framebuffer(color_attachments=[ctx.renderbuffer((8, 6), 4)])
+        window.use()
+        ctx.clear(0.2, 0.4, 0.6, 1.0)
+    display.warm(window, "color", outline=True)
+    assert list(display.programs) == [("color", True)]
+    with ctx:
+        rows = np.frombuffer(window.read(components=3, alignment=1), np.uint8).reshape(6, 8, 3)
+        window.release()
+    untouched = np.ones((6, 8), bool)
+    untouched[0, 0] = False                    # framebuffer row 0 is the bottom row
+    assert (rows[untouched] == np.round(np.array([0.2, 0.4, 0.6]) * 255)).all()

@@ -7,11 +7,12 @@
 // The planes may be smaller than the viewport (the viewer renders at reduced resolution while
 // the camera moves): each pixel shows the texel under its centre, fetched whole with
 // texelFetch (an integer texture cannot be filtered, and an object id must not be blended).
+//
+// This one shows the "{{ overlay }}" overlay{{ " with the selection's outline" if outline else "" }}: a program is made per overlay and outline, with only
+// that code in it. A software rasteriser such as llvmpipe runs every branch of a shader for
+// every pixel (under a mask), so one program with all overlays behind a uniform switch costs
+// the sum of them all: 10 to 15 ms a frame at 640x480, against about 1 ms for this.
 
-// The overlays, numbered as display.OVERLAYS lists them.
-{% for name in overlays %}
-const int {{ name | upper }} = {{ loop.index0 }};
-{% endfor %}
 const int HEAT_STOP_COUNT = {{ heat_stop_count }};
 const int MAX_SELECTED = {{ max_selected }};
 
@@ -19,7 +20,6 @@ uniform sampler2D color_hit;       // plane 0: rgb colour, a: 1 on a hit
 uniform sampler2D normal_depth;    // plane 1: xyz normal, w: depth t (inf on a miss)
 uniform isampler2D steps_id;       // plane 2: x steps, y object id (-1 on a miss)
 
-uniform int overlay;               // which picture: COLOR, DEPTH, ...
 uniform ivec4 viewport;            // x, y, width, height of the drawing, in framebuffer pixels
 uniform float gamma;
 uniform float max_steps;
@@ -32,6 +32,17 @@ uniform vec3 outline_color;
 
 out vec4 picture;
 
+// floor(n / d) for n >= 0, d > 0, exactly: a float quotient, then corrected by one where its
+// rounding crossed an integer. (Integer division has no SIMD instruction, so a software
+// rasteriser divides lane by lane; this stays in vector floats and integer products.)
+ivec2 floor_divide(ivec2 n, ivec2 d)
+{
+    ivec2 q = ivec2(vec2(n) / vec2(d));
+    q -= ivec2(greaterThan(q * d, n));
+    q += ivec2(lessThanEqual((q + 1) * d, n));
+    return q;
+}
+
 // The texel this pixel shows: the one whose area holds the pixel's centre,
 // floor((column + 0.5) * W / w) across, in integers. Texel row r is image row r from the top
 // while framebuffer rows count from the bottom, so the rows are turned over: the top of the
@@ -40,10 +51,8 @@ ivec2 source_texel()
 {
     ivec2 size = textureSize(steps_id, 0);
     ivec2 local = ivec2(gl_FragCoord.xy) - viewport.xy;
-    int column = local.x;
-    int row = viewport.w - 1 - local.y;
-    return ivec2((2 * column + 1) * size.x / (2 * viewport.z),
-                 (2 * row + 1) * size.y / (2 * viewport.w));
+    ivec2 pixel = ivec2(local.x, viewport.w - 1 - local.y);
+    return floor_divide((2 * pixel + 1) * size, 2 * viewport.zw);
 }
 
 // scene_model.colormaps.heat: linear interpolation between the stops (numpy.interp).
@@ -121,30 +130,31 @@ vec3 to_uint8(vec3 x)
 // One pixel of scene_model.frame.Frame.image(overlay), or of the object-id overlay.
 vec3 overlay_color(ivec2 texel)
 {
-    vec4 ch = texelFetch(color_hit, texel, 0);
-    vec4 nd = texelFetch(normal_depth, texel, 0);
-    ivec4 si = texelFetch(steps_id, texel, 0);
-    bool hit = ch.a > 0.5;
-    if (overlay == COLOR) {
-        return pow(ch.rgb, vec3(1.0 / gamma));
-    }
-    if (overlay == DEPTH) {
-        float near = depth_range.x, far = depth_range.y;
-        return hit ? vec3(1.0 - (nd.w - near) / max(far - near, 1e-12)) : vec3(0.0);
-    }
-    if (overlay == NORMAL) {
-        return hit ? 0.5 + 0.5 * nd.xyz : vec3(0.0);
-    }
-    if (overlay == STEPS) {
-        return heat(float(si.x) / max_steps);
-    }
-    return id_colors(si.y);
+{% if overlay == "color" %}
+    return pow(texelFetch(color_hit, texel, 0).rgb, vec3(1.0 / gamma));
+{% elif overlay == "depth" %}
+    bool hit = texelFetch(color_hit, texel, 0).a > 0.5;
+    float t = texelFetch(normal_depth, texel, 0).w;
+    float near = depth_range.x, far = depth_range.y;
+    return hit ? vec3(1.0 - (t - near) / max(far - near, 1e-12)) : vec3(0.0);
+{% elif overlay == "normal" %}
+    bool hit = texelFetch(color_hit, texel, 0).a > 0.5;
+    return hit ? 0.5 + 0.5 * texelFetch(normal_depth, texel, 0).xyz : vec3(0.0);
+{% elif overlay == "steps" %}
+    return heat(float(texelFetch(steps_id, texel, 0).x) / max_steps);
+{% else %}
+    return id_colors(object_id(texel));
+{% endif %}
 }
 
 void main()
 {
     ivec2 texel = source_texel();
+{% if outline %}
     vec3 rgb = outline_mask(texel) ? outline_color : overlay_color(texel);
+{% else %}
+    vec3 rgb = overlay_color(texel);
+{% endif %}
     // Opaque, so the picture is the same whether or not the caller left blending on.
     picture = vec4(to_uint8(rgb), 1.0);
 }
