@@ -254,6 +254,11 @@ class Window:
             screen = ctx.detect_framebuffer(0)      # the window's own, not the last bound
             screen.use()
             ctx.clear(0.0, 0.0, 0.0)
+            if self.frame_count == 0:
+                # The first selection's display program, drawn once now into this
+                # framebuffer, in the state every frame draws in, under the picture.
+                self.drawer.display.warm(screen, "color", outline=True)
+                screen.use()
             self.drawer.show(self.viewer, (0, 0, int(width * scale.x), int(height * scale.y)))
             if self.recorder is not None:
                 self.recorder.add(self.drawer.shown_image(self.viewer))
@@ -346,6 +351,10 @@ class Window:
                 playback.pause() if playback.playing else playback.play()
             if imgui.is_key_pressed(imgui.Key.delete):
                 viewer.delete_selected()
+            if imgui.is_key_pressed(imgui.Key.tab):
+                # The panels away (and back): the whole window for the scene, in front of a
+                # class; and on a software rasteriser, a faster frame (docs/viewer.md).
+                self.panels = not self.panels
         viewer.hold_keys(held)
 
     def _click(self, x, y) -> None:
@@ -456,6 +465,10 @@ class Window:
                 viewer.undo()
             if imgui.menu_item("Redo", "Ctrl+Shift+Z", False, viewer.history.can_redo)[0]:
                 viewer.redo()
+            imgui.end_menu()
+        if imgui.begin_menu("View"):
+            if imgui.menu_item("Hide the panels", "Tab", False)[0]:
+                self.panels = False
             imgui.end_menu()
         mark = " (modified)" if viewer.modified else ""
         imgui.text_disabled(f"  {viewer.source}{mark}   {viewer.status}")
@@ -690,14 +703,17 @@ class Window:
         imgui.text(f"{viewer.fps():5.1f} fps, drawing {size[0]}x{size[1]}"
                    f"{' (moving)' if viewer.moving else ''}, "
                    f"{self.drawer.renders} renders")
-        _, viewer.resolution_scale = imgui.slider_float("resolution", viewer.resolution_scale,
-                                                        0.1, 1.0)
+        changed, scale = imgui.slider_float("resolution", viewer.resolution_scale, 0.1, 1.0)
+        if changed:
+            viewer.resolution_scale = float32_value(scale)
         _, viewer.refine = imgui.checkbox("reduced resolution while moving", viewer.refine)
         if viewer.refine:
             _, viewer.adapt = imgui.checkbox(f"adapt it to {TARGET_FPS:.0f} fps", viewer.adapt)
             imgui.same_line()
-            _, viewer.moving_scale = imgui.slider_float("moving scale", viewer.moving_scale,
-                                                        MOVING_SCALES[0], MOVING_SCALES[-1])
+            changed, scale = imgui.slider_float("moving scale", viewer.moving_scale,
+                                                MOVING_SCALES[0], MOVING_SCALES[-1])
+            if changed:                     # (the widget's float32, only when it is moved)
+                viewer.moving_scale = float32_value(scale)
         if self.drawer.compiling:
             imgui.text_colored((1.0, 0.8, 0.3, 1.0), "compiling the edited scene's shader; "
                                "showing the last one until it is ready")
