@@ -55,6 +55,8 @@ class CheckResult:
     failures: list[str]          # one line per gate failed; empty: every gate passes
     rows: list[tuple[str, str]]  # the comparison's figures, as `marchlab compare` prints them
     seconds: float
+    opencl: np.ndarray | None = None          # (H, W, 3) uint8, the OpenCL backend's, where
+    opencl_failures: list[str] | None = None  # it runs, and its gates against the reference
 
 
 class Viewer:
@@ -84,6 +86,7 @@ class Viewer:
         self.status = ""
         self.check: CheckResult | None = None
         self.check_progress = None   # (done, total) while a check runs
+        self.check_stage = ""        # what it is rendering then
         self.probe = None
         self._last_motion = -math.inf
         self._held_keys: set[str] = set()
@@ -481,11 +484,12 @@ class Viewer:
     def check_against_reference(self, gpu_frame, background: bool = True):
         """Render the view with the NumPy reference and compare ``gpu_frame`` (the gpu
         backend's frame of the same view, with path labels) to it under the equivalence
-        gates; in a thread when ``background``, so the window keeps drawing. Sets `check`."""
+        gates, and the OpenCL backend's frame too where it runs; in a thread when
+        ``background``, so the window keeps drawing. Sets `check`."""
         scene = self.scene_now()
         height, width = gpu_frame.height, gpu_frame.width
         self.check = None
-        self.check_progress = (0, width * height)
+        self.check_stage, self.check_progress = "NumPy reference rendering", (0, width * height)
 
         def work():
             try:
@@ -498,16 +502,32 @@ class Viewer:
         def check():
             start = time.perf_counter()
             from .compare import compare_frames, failures, gates_against
-            from .render import render
+            from .render import backend_problem, render
+
+            def progress(stage):
+                def report(done, total):
+                    self.check_stage, self.check_progress = stage, (done, total)
+                return report
+
             reference = render(scene, width, height, backend="numpy", path_labels=True,
-                               progress=lambda done, total: setattr(
-                                   self, "check_progress", (done, total)))
-            comparison = compare_frames(reference, gpu_frame, epsilon=scene.render.epsilon)
+                               progress=progress("NumPy reference rendering"))
+            gates = gates_against("float64")
+
+            def against_reference(frame):
+                comparison = compare_frames(reference, frame, epsilon=scene.render.epsilon)
+                return comparison, failures(comparison, gates)
+
+            comparison, gpu_failures = against_reference(gpu_frame)
             a, b = reference.image(), gpu_frame.image()
             difference = np.clip(np.abs(a.astype(int) - b.astype(int)) * 32, 0, 255)
-            self.check = CheckResult(a, b, difference.astype(np.uint8),
-                                     failures(comparison, gates_against("float64")),
-                                     comparison.rows(), time.perf_counter() - start)
+            opencl = opencl_failures = None
+            if backend_problem("opencl") is None:        # the third backend, where present
+                frame = render(scene, width, height, backend="opencl", path_labels=True,
+                               progress=progress("OpenCL rendering"))
+                opencl, opencl_failures = frame.image(), against_reference(frame)[1]
+            self.check = CheckResult(a, b, difference.astype(np.uint8), gpu_failures,
+                                     comparison.rows(), time.perf_counter() - start,
+                                     opencl, opencl_failures)
 
         if not background:
             try:

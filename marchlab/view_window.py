@@ -739,14 +739,16 @@ class Window:
         viewer = self.viewer
         if viewer.check_progress is not None:
             done, total = viewer.check_progress
-            imgui.progress_bar(done / max(total, 1), (-1, 0), "NumPy reference rendering")
+            imgui.progress_bar(done / max(total, 1), (-1, 0), viewer.check_stage)
             return
         check = viewer.check
-        verdict = "every gate passes" if not check.failures else "FAILS: " + "; ".join(
-            check.failures)
-        imgui.text_wrapped(f"{verdict} ({check.seconds:.1f} s)")
+        imgui.text_wrapped(f"gpu: {_verdict(check.failures)} ({check.seconds:.1f} s)")
+        if check.opencl_failures is not None:
+            imgui.text_wrapped(f"OpenCL: {_verdict(check.opencl_failures)}")
         size = (check.reference.shape[1] / 2, check.reference.shape[0] / 2)
-        for name in ("reference", "gpu", "difference"):
+        names = ("reference", "gpu", "difference") + (("opencl",) if check.opencl is not None
+                                                       else ())
+        for name in names:
             texture = self._texture(name, getattr(check, name))
             imgui.begin_group()
             imgui.text(name if name != "difference" else f"difference x{DIFFERENCE_GAIN}")
@@ -815,6 +817,10 @@ class _Gl:
 
 
 _UNCHANGED = object()
+
+
+def _verdict(failures) -> str:
+    return "every gate passes" if not failures else "FAILS: " + "; ".join(failures)
 
 
 MENU_BAR = 20        # pixels at the top of the window that the menu bar takes

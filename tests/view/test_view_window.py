@@ -201,6 +201,9 @@ def test_check_against_the_reference_on_a_small_view_passes_every_gate(window, t
     width, height = seen["size"]
     assert (width, height) == (340, 240)                 # the window's, CHECK_SIZE
     assert seen["failures"] == []
+    from required_backends import why_unavailable
+    if why_unavailable("opencl") is None:              # the third backend, where it runs
+        assert seen["opencl_failures"] == []
     for name in ("reference", "gpu", "difference"):
         assert arrays[name].shape == (height, width, 3), name
     scene = load_scene("classroom")

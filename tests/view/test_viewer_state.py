@@ -554,3 +554,11 @@ def test_check_against_the_references_own_frame_gives_identical_images(checked):
 
 def test_check_against_the_references_own_frame_passes_every_gate(checked):
     assert checked.check.failures == []
+
+
+def test_the_check_holds_opencl_against_the_reference_too_where_it_runs(checked):
+    from required_backends import need_backend
+    need_backend("opencl")
+    check = checked.check
+    assert check.opencl.shape == (24, 32, 3)
+    assert check.opencl_failures == []

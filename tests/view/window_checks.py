@@ -240,7 +240,7 @@ def reference_check(out: Path) -> None:
     result = viewer.check
     np.savez(out / "result.npz", reference=result.reference, gpu=result.gpu,
              difference=result.difference)
-    _state(out, failures=result.failures, **seen)
+    _state(out, failures=result.failures, opencl_failures=result.opencl_failures, **seen)
 
 
 def _yield_until(ctx, done) -> None:
