@@ -27,7 +27,7 @@ import numpy as np
 from .relaxation import Relaxation
 
 
-def textbook_march(origins, directions, sdf, max_steps, epsilon, max_distance):
+def textbook_march(origins, directions, sdf, max_steps, epsilon, max_distance, start=None):
     """Sphere tracing as Hart (1996) writes it: every ray steps by |sdf| until it hits or misses.
 
     All rays step together, as NumPy arrays; ``marching`` says which of them have neither hit
@@ -48,6 +48,9 @@ def textbook_march(origins, directions, sdf, max_steps, epsilon, max_distance):
         A ray hits where |sdf| < epsilon.
     max_distance : float or (N,) ndarray
         A ray misses once t > max_distance (one limit per ray for shadow rays).
+    start : (N,) ndarray, optional
+        Where each ray starts (default 0): a distance known to hold no surface within
+        epsilon of the ray before it (`reference_cpu.cone_prepass`).
 
     Returns
     -------
@@ -59,7 +62,7 @@ def textbook_march(origins, directions, sdf, max_steps, epsilon, max_distance):
     """
     n, dtype = len(directions), directions.dtype
     epsilon, max_distance = dtype.type(epsilon), np.asarray(max_distance, dtype)
-    t = np.zeros(n, dtype)
+    t = np.zeros(n, dtype) if start is None else np.array(start, dtype)
     t_hit = np.full(n, np.inf, dtype)
     steps = np.full(n, max_steps, np.int32)      # a ray that never stops uses every step
     hit = np.zeros(n, bool)
@@ -78,7 +81,7 @@ def textbook_march(origins, directions, sdf, max_steps, epsilon, max_distance):
 
 
 def march(origins, directions, sdf, max_steps, epsilon, max_distance, observe=None, *,
-          relaxation="none", omega=1.2, bounds=None):
+          relaxation="none", omega=1.2, bounds=None, start=None):
     """March every ray until it hits, escapes, or runs out of steps: `textbook_march`, fast.
 
     With ``relaxation="none"`` and no ``bounds`` the results are those of `textbook_march`,
@@ -108,6 +111,8 @@ def march(origins, directions, sdf, max_steps, epsilon, max_distance, observe=No
         How far a step goes (`reference_cpu.relaxation`); ``omega`` is the fixed factor.
     bounds : reference_cpu.culling.BoundingSpheres, optional
         Bounding-sphere culling: each ray's SDF leaves out the objects it cannot reach.
+    start : (N,) ndarray, optional
+        Where each ray starts, as in `textbook_march` (the cone pre-pass's distances).
 
     Returns
     -------
@@ -128,7 +133,7 @@ def march(origins, directions, sdf, max_steps, epsilon, max_distance, observe=No
     index = np.arange(n)
     o = columns(origins) if origins.ndim == 2 else origins
     d = columns(directions)
-    t = np.zeros(n, dtype=dtype)
+    t = np.zeros(n, dtype=dtype) if start is None else np.array(start, dtype=dtype)
     limit = np.asarray(max_distance, dtype=dtype)      # a scalar, or one limit per ray
     live = np.ones(n, dtype=bool)
     # Per-ray state of the optional features, compacted with the rest.

@@ -21,6 +21,7 @@ from scene_model.scene import Checker, Scene
 from scene_model.shapes import primitives
 
 from . import shading
+from .cone_prepass import start_distances
 from .culling import BoundingSpheres
 from .lights import light_at
 from .march import march
@@ -35,17 +36,26 @@ AOV_MODES = ("normals", "depth", "steps")
 
 def render(scene: Scene, width: int, height: int, precision: str = "float64",
            progress: Callable[[int, int], None] | None = None,
-           path_labels: bool = False) -> Frame:
+           path_labels: bool = False, prepass_tile: int | None = None) -> Frame:
     """Render ``scene`` at ``width`` x ``height`` pixels in float32 or float64.
 
     ``progress(done, total)`` is called after each block of rays, if given; with
-    ``path_labels`` the frame holds each pixel's path label (`Frame.path`), else None.
+    ``path_labels`` the frame holds each pixel's path label (`Frame.path`), else None. With
+    ``prepass_tile`` T, each primary ray starts where its T x T tile's cone got to
+    (`reference_cpu.cone_prepass`; not yet a scene setting: the gpu and OpenCL backends do
+    not run it yet).
     """
     dtype = np.dtype(precision)
     tracer = Tracer(scene, dtype, path_labels)
     origin, directions = camera_rays(scene.camera, width, height, dtype)
     directions = directions.reshape(-1, 3)
     n = len(directions)
+    starts = np.zeros(n, dtype)            # where each primary ray starts
+    if prepass_tile is not None:
+        r = scene.render
+        cone_start, _ = start_distances(scene.camera, width, height, tracer.sdf64,
+                                        prepass_tile, r.max_steps, r.epsilon, r.max_distance)
+        starts = cone_start.reshape(-1).astype(dtype)
     out = {
         "color": np.zeros((n, 3), np.float32), "depth": np.full(n, np.inf, dtype),
         "normal": np.zeros((n, 3), dtype), "steps": np.zeros(n, np.int32),
@@ -56,7 +66,7 @@ def render(scene: Scene, width: int, height: int, precision: str = "float64",
     block = max(1, BLOCK_RAYS // width) * width
     for start in range(0, n, block):
         rows = slice(start, min(start + block, n))
-        for name, values in tracer.trace(origin, directions[rows]).items():
+        for name, values in tracer.trace(origin, directions[rows], starts[rows]).items():
             out[name][rows] = values
         if progress is not None:
             progress(rows.stop, n)
@@ -87,6 +97,8 @@ class Tracer:
         self.scene, self.settings, self.dtype = scene, scene.render, dtype
         self.path_labels = path_labels
         self.sdf = build_scene_sdf(scene.objects, dtype)
+        self.sdf64 = self.sdf if dtype == np.float64 else build_scene_sdf(scene.objects,
+                                                                          np.float64)
         self.sdf_ids = build_scene_sdf(scene.objects, dtype, with_ids=True)
         # How far each step of a march goes (relaxation, culling): the same for primary,
         # mirror and hard-shadow rays. Soft shadows keep plain steps: their penumbra is
@@ -109,10 +121,10 @@ class Tracer:
 
     # --- one block of primary rays --------------------------------------------------------
 
-    def trace(self, origin, directions) -> dict[str, np.ndarray]:
+    def trace(self, origin, directions, start=None) -> dict[str, np.ndarray]:
         s = self.settings
         t, steps, hit = march(origin, directions, self.sdf, s.max_steps, s.epsilon,
-                              s.max_distance, **self.marching)
+                              s.max_distance, start=start, **self.marching)
         normal = np.zeros_like(directions)
         object_id = np.full(len(directions), -1, np.int32)
         normal[hit], object_id[hit] = self.hit_info(origin + t[hit, None] * directions[hit])
