@@ -64,8 +64,9 @@ class Viewer:
 
     Parameters
     ----------
-    source : str or os.PathLike
-        A bundled scene's name or a scene file (`scene_model.scenefile.load_scene`).
+    source : str, os.PathLike or Scene
+        A bundled scene's name or a scene file (`scene_model.scenefile.load_scene`), or a
+        scene made in Python.
     size : (int, int)
         The view's size in pixels, width by height.
     clock : callable, optional
@@ -97,10 +98,13 @@ class Viewer:
     # --- the scene -------------------------------------------------------------------------
 
     def open(self, source) -> None:
-        """Show another scene file (or bundled scene); its camera is the start."""
-        scene = load_scene(source)
-        self.source = str(source)
-        self.path = scene_path(source)
+        """Show another scene file (or bundled scene, or a `Scene` made in Python, which
+        has no file until it is saved under a name); its camera is the start."""
+        if isinstance(source, Scene):
+            scene, self.source, self.path = source, "a scene made in Python", None
+        else:
+            scene = load_scene(source)
+            self.source, self.path = str(source), scene_path(source)
         self._mtime = _mtime(self.path)
         self.history = editing.History(scene)
         self.camera = scene.camera
@@ -164,6 +168,8 @@ class Viewer:
         """Write the scene, with the view's camera, as TOML (to its own file by default; a
         bundled scene must be saved under a new name)."""
         if path is None:
+            if self.path is None:
+                raise MarchlabError("this scene has no file yet: save it under a name")
             if _is_bundled(self.path):
                 raise MarchlabError(f"{self.source} is a bundled scene: save it under a new "
                                     "name (File > Save as)")
@@ -174,7 +180,8 @@ class Viewer:
         scene = self.scene
         write_atomically(path, scene_to_toml(scene).encode("utf-8"))
         self.saved_scene = scene
-        if path.resolve() == self.path.resolve() or _is_bundled(self.path):
+        if self.path is None or path.resolve() == self.path.resolve() \
+                or _is_bundled(self.path):
             self.path, self.source = path, str(path)
         self._mtime = _mtime(self.path)
         self.status = f"saved {path}"
@@ -565,7 +572,9 @@ def adapt_moving_scale(scale: float, frame_seconds: float, fixed_seconds: float 
     return steps[here]
 
 
-def _mtime(path: Path):
+def _mtime(path: Path | None):
+    if path is None:
+        return None
     try:
         return os.stat(path).st_mtime_ns
     except OSError:

@@ -562,3 +562,14 @@ def test_the_check_holds_opencl_against_the_reference_too_where_it_runs(checked)
     check = checked.check
     assert check.opencl.shape == (24, 32, 3)
     assert check.opencl_failures == []
+
+
+def test_a_scene_made_in_python_opens_has_no_file_and_saves_only_under_a_name(tmp_path):
+    scene = load_scene("csg")
+    viewer = Viewer(scene, SIZE)
+    assert viewer.scene == scene and viewer.path is None
+    assert viewer.reload_if_changed() is False
+    with pytest.raises(MarchlabError, match="has no file yet"):
+        viewer.save()
+    saved = viewer.save(tmp_path / "mine.toml")
+    assert load_scene(saved) == viewer.scene and viewer.path == saved

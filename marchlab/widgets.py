@@ -1,0 +1,313 @@
+"""A scene you can turn with the mouse in a notebook: ``marchlab.widgets.View``.
+
+    from marchlab.widgets import View
+    View("classroom", controls=["render.epsilon", "materials.red.shininess"])
+
+The picture is the gpu backend's frame of the view, shown by jupyter-rfb (a remote frame
+buffer: the kernel renders, the browser shows the image and sends back the mouse and keys,
+JPEG while moving and PNG at rest). Left drag orbits, right drag pans, the wheel zooms and
+W A S D Q E fly, with the mapping of the ``marchlab view`` window (`marchlab.camera_control`,
+through the same `marchlab.view.Viewer`). Beside the picture: a slider or picker for each
+field named in ``controls``, the overlay (colour, steps heat map, depth, normals, object
+ids), the time the last frame took, and "Check against the reference".
+
+Saved or shown without a kernel (nbconvert, the docs site, GitHub), a View shows a PNG of its
+first frame instead of the widget's text.
+
+Needs the ``[lessons]`` extra (ipywidgets, jupyter-rfb) and the gpu backend.
+"""
+
+from __future__ import annotations
+
+import base64
+import dataclasses
+import io
+import math
+import time
+import typing
+
+import numpy as np
+
+from scene_model.errors import MarchlabError
+from scene_model.fields import Range, color_range, field_types
+from scene_model import editing
+
+from .view import OVERLAYS, SETTLE_SECONDS, Viewer
+
+WHEEL_NOTCH = 100.0        # a browser's deltaY for one notch of a mouse wheel
+KEY_SECONDS = 0.1          # how long one press of a flying key flies
+BUTTONS = {1: "left", 2: "right", 3: "middle"}
+
+
+def _remote_frame_buffer():
+    try:
+        from jupyter_rfb import RemoteFrameBuffer
+    except ImportError:
+        raise MarchlabError("the notebook view needs jupyter-rfb: pip install "
+                            "'marchlab[lessons]' (make lessons installs it)") from None
+    return RemoteFrameBuffer
+
+
+class _Canvas:
+    """The picture and the mouse: made a jupyter-rfb `RemoteFrameBuffer` by `canvas`."""
+
+    def __init__(self, viewer: Viewer, **traits):
+        super().__init__(**traits)
+        self.viewer = viewer
+        self.frame = None                 # the last gpu Frame drawn
+        self.seconds = 0.0                # the last frame's render time
+        self.on_draw = []                 # called with the canvas after each frame
+        self._pointer = None              # (button, x, y) while a button is down
+        self._moved = False
+
+    # --- jupyter-rfb's two methods ------------------------------------------------------
+
+    def get_frame(self) -> np.ndarray:
+        """The view, rendered now by the gpu backend (at reduced resolution while it
+        moves) and encoded as `marchlab render` encodes a frame: (H, W, 3) uint8."""
+        from gpu_shader.display import overlay_image
+        from .render import render
+        viewer = self.viewer
+        start = time.perf_counter()
+        self.frame = render(viewer.drawn_scene(), *viewer.render_size(), backend="gpu")
+        image = overlay_image(self.frame, viewer.overlay, viewer.selected_ids())
+        self.seconds = time.perf_counter() - start
+        if viewer.moving:
+            self._refine_later()
+        for callback in self.on_draw:
+            callback(self)
+        return image
+
+    def handle_event(self, event: dict) -> None:
+        """A jupyter-rfb event (pointer, wheel, key or resize), as the window's input."""
+        kind, viewer = event.get("type") or event.get("event_type"), self.viewer
+        if kind == "resize":
+            viewer.size = (max(1, round(event["width"])), max(1, round(event["height"])))
+        elif kind == "pointer_down":
+            button = BUTTONS.get(event.get("button"), "left")
+            self._pointer, self._moved = (button, event["x"], event["y"]), False
+            if button == "left":
+                viewer.press(event["x"], event["y"], shift="Shift" in event.get("modifiers", ()))
+        elif kind == "pointer_move" and self._pointer is not None:
+            button, x, y = self._pointer
+            dx, dy = event["x"] - x, event["y"] - y
+            self._pointer, self._moved = (button, event["x"], event["y"]), True
+            if button == "left" and viewer.holding is not None:
+                viewer.move_to(event["x"], event["y"])
+            else:
+                viewer.drag(button, dx, dy)
+        elif kind == "pointer_up" and self._pointer is not None:
+            button, held = self._pointer[0], viewer.holding
+            viewer.let_go()
+            if button == "left" and held is None and not self._moved:
+                viewer.pick(self.object_id_at(event["x"], event["y"]))
+            self._pointer = None
+        elif kind == "wheel":
+            viewer.scroll(-event.get("dy", 0.0) / WHEEL_NOTCH)
+        elif kind == "key_down" and event.get("key", "").upper() in "WASDQE" \
+                and len(event.get("key", "")) == 1:
+            viewer.fly({event["key"].upper()}, KEY_SECONDS,
+                       fast="Shift" in event.get("modifiers", ()))
+        else:
+            return
+        self.request_draw()
+
+    # --- helpers -----------------------------------------------------------------------
+
+    def object_id_at(self, x: float, y: float) -> int:
+        """The object id under view pixel (x, y) in the last frame drawn (-1: nothing)."""
+        if self.frame is None:
+            return -1
+        height, width = self.frame.object_id.shape
+        i = min(max(int(x * width / self.viewer.size[0]), 0), width - 1)
+        j = min(max(int(y * height / self.viewer.size[1]), 0), height - 1)
+        return int(self.frame.object_id[j, i])
+
+    def _refine_later(self) -> None:
+        """Draw again once the motion has settled, at full resolution."""
+        import asyncio
+        try:
+            loop = asyncio.get_running_loop()
+        except RuntimeError:
+            try:
+                loop = asyncio.get_event_loop()
+            except RuntimeError:
+                return
+        loop.call_later(SETTLE_SECONDS * 1.05, self.request_draw)
+
+
+def canvas(viewer: Viewer, **traits):
+    """A jupyter-rfb canvas showing ``viewer`` (the class is made when first asked for, so
+    that importing this module needs no jupyter-rfb)."""
+    global Canvas
+    if Canvas is None:
+        Canvas = type("Canvas", (_Canvas, _remote_frame_buffer()), {"__doc__": _Canvas.__doc__})
+    return Canvas(viewer, **traits)
+
+
+Canvas = None
+
+
+# --- the controls ------------------------------------------------------------------------
+
+def field_control(viewer: Viewer, path: str):
+    """An ipywidgets control for the scene field at ``path``, which sets it through
+    `Viewer.set_field` (validated; a refused value is put back and the reason shown)."""
+    import ipywidgets as widgets
+    scene = viewer.scene
+    value = editing.get_field(scene, path)
+    hint, check = _field_rules(scene, path)
+    label = path.rsplit(".", 1)[-1]
+    style = {"description_width": "initial"}
+    if typing.get_origin(hint) is typing.Literal:
+        control = widgets.Dropdown(options=list(typing.get_args(hint)), value=value,
+                                   description=label, style=style)
+    elif isinstance(value, bool):
+        control = widgets.Checkbox(value=value, description=label)
+    elif check is color_range and isinstance(value, tuple):
+        control = widgets.ColorPicker(value=_hex(value), description=label, style=style)
+    elif isinstance(value, int):
+        low, high = _span(value, check)
+        control = widgets.IntSlider(value=value, min=int(low), max=int(high),
+                                    description=label, style=style)
+    elif isinstance(value, float):
+        low, high = _span(value, check)
+        if low > 0 and high / low >= 100:           # decades apart: a log slider
+            control = widgets.FloatLogSlider(value=value, base=10, min=math.log10(low),
+                                             max=math.log10(high), description=label,
+                                             style=style, readout_format=".3g")
+        else:
+            control = widgets.FloatSlider(value=value, min=low, max=high,
+                                          step=(high - low) / 200, description=label,
+                                          style=style, readout_format=".3g")
+    else:
+        raise MarchlabError(f"View controls: {path} is a {type(value).__name__}, which has "
+                            "no control (numbers, choices, colours and switches have)")
+
+    def changed(change):
+        new = change["new"]
+        if isinstance(control, widgets.ColorPicker):
+            new = _rgb(new)
+        if not viewer.set_field(path, new):
+            control.value = change["old"]
+
+    control.observe(changed, names="value")
+    return control
+
+
+def _field_rules(scene, path: str):
+    """(type hint, check) of the field at ``path`` where it is a field of a record, else
+    (None, None)."""
+    if "." not in path:
+        return None, None
+    parent, name = path.rsplit(".", 1)
+    record = editing.get_field(scene, parent)
+    if not dataclasses.is_dataclass(record):
+        return None, None
+    fields = {f.name: f for f in dataclasses.fields(record)}
+    if name not in fields:
+        return None, None
+    return field_types(type(record)).get(name), fields[name].metadata.get("check")
+
+
+def _span(value, check) -> tuple[float, float]:
+    """A slider's ends: the field's own range where it is finite, else around ``value``."""
+    low, high = (check.lo, check.hi) if isinstance(check, Range) else (-math.inf, math.inf)
+    if not math.isfinite(low):
+        low = min(0.0, value * 4)
+    if not math.isfinite(high):
+        high = max(abs(value) * 4, 1.0)
+    if isinstance(check, Range) and check.positive and low <= 0:
+        low = min(value, high) / 1000 if value > 0 else 1e-6
+    return low, high
+
+
+def _hex(rgb) -> str:
+    return "#" + "".join(f"{round(min(max(c, 0.0), 1.0) * 255):02x}" for c in rgb)
+
+
+def _rgb(text: str) -> tuple[float, float, float]:
+    return tuple(int(text[i:i + 2], 16) / 255 for i in (1, 3, 5))
+
+
+# --- the view --------------------------------------------------------------------------------
+
+class View:
+    """A scene in a notebook: the gpu backend's picture, turned with the mouse, beside
+    controls for the fields a lesson names.
+
+    Parameters
+    ----------
+    scene : str, os.PathLike or Scene
+        A bundled scene's name, a scene file, or a scene made in Python.
+    controls : sequence of str
+        Field paths to give a control each (``"render.epsilon"``, ``"lights.0.intensity"``,
+        ``"materials.red.color"``), as `marchlab render --set` names them.
+    size : (int, int)
+        The picture's size in pixels, width by height.
+    overlay : str
+        What the picture shows first: one of `marchlab.view.OVERLAYS`.
+    """
+
+    def __init__(self, scene, controls=(), size=(480, 360), overlay: str = "color"):
+        import ipywidgets as widgets
+        if overlay not in OVERLAYS:
+            raise MarchlabError(f"unknown overlay {overlay!r} (one of: {', '.join(OVERLAYS)})")
+        self.viewer = Viewer(scene, size)
+        self.viewer.overlay = overlay
+        self.canvas = canvas(self.viewer, css_width=f"{size[0]}px", css_height=f"{size[1]}px",
+                             resizable=False)
+        self.controls = [field_control(self.viewer, path) for path in controls]
+        for control in self.controls:
+            control.observe(lambda _: self.canvas.request_draw(), names="value")
+        self.overlay = widgets.Dropdown(options=list(OVERLAYS), value=overlay,
+                                        description="overlay")
+        self.overlay.observe(self._set_overlay, names="value")
+        self.timing = widgets.Label("")
+        self.canvas.on_draw.append(self._show_timing)
+        self.check_button = widgets.Button(description="Check against the reference")
+        self.check_button.on_click(lambda _: self.check())
+        self.verdict = widgets.Label("")
+        self.widget = widgets.HBox([self.canvas, widgets.VBox(
+            [*self.controls, self.overlay, self.timing, self.check_button, self.verdict])])
+        self._first_png = None
+
+    def _set_overlay(self, change) -> None:
+        self.viewer.overlay = change["new"]
+        self.canvas.request_draw()
+
+    def _show_timing(self, canvas) -> None:
+        width, height = canvas.frame.width, canvas.frame.height
+        self.timing.value = f"{canvas.seconds * 1e3:.0f} ms a frame at {width}x{height}"
+
+    def image(self) -> np.ndarray:
+        """The picture as it stands, (H, W, 3) uint8 (a frame drawn now)."""
+        return self.canvas.get_frame()
+
+    def check(self):
+        """Render the view with the NumPy reference (and OpenCL where it runs) and give the
+        equivalence gates' verdict (`Viewer.check_against_reference`); returns it."""
+        from .render import render
+        viewer = self.viewer
+        gpu = render(viewer.drawn_scene(), *viewer.rest_size(), backend="gpu",
+                     path_labels=True)
+        viewer.check_against_reference(gpu, background=False)
+        result = viewer.check
+        verdict = "every gate passes" if not result.failures else "; ".join(result.failures)
+        self.verdict.value = f"gpu: {verdict}" + (
+            "" if result.opencl_failures is None else
+            f"; OpenCL: {'every gate passes' if not result.opencl_failures else 'FAILS'}")
+        return result
+
+    def _repr_mimebundle_(self, **kwargs):
+        """The widget, and a PNG of its first frame for where widgets do not show."""
+        bundle = self.widget._repr_mimebundle_(**kwargs)
+        data = bundle[0] if isinstance(bundle, tuple) else bundle
+        if self._first_png is None:
+            from PIL import Image
+            buffer = io.BytesIO()
+            Image.fromarray(self.image()).save(buffer, format="PNG")
+            self._first_png = base64.b64encode(buffer.getvalue()).decode("ascii")
+        data["image/png"] = self._first_png
+        data["text/plain"] = f"marchlab View of {self.viewer.source}"
+        return bundle

@@ -1,0 +1,148 @@
+"""``marchlab.widgets.View``, the notebook view, driven with synthetic jupyter-rfb events (no
+browser): its mouse moves the camera as the window's does, its picture is the gpu backend's
+frame, its controls set scene fields, and saved without a kernel it leaves a PNG."""
+
+from __future__ import annotations
+
+import base64
+import io
+import math
+
+import numpy as np
+import pytest
+
+from marchlab import camera_control
+from marchlab.render import render
+from required_backends import need_backend
+from scene_model.errors import MarchlabError, SceneError
+from scene_model.scenefile import load_scene
+
+pytest.importorskip("jupyter_rfb", reason="the notebook view needs the [lessons] extra")
+SIZE = (96, 72)
+
+
+@pytest.fixture
+def view():
+    need_backend("gpu")
+    from marchlab.widgets import View
+    return View("classroom", controls=["render.epsilon", "materials.red.shininess",
+                                       "render.shadows", "materials.red.color"], size=SIZE)
+
+
+def _drag(view, button, start, end):
+    canvas = view.canvas
+    canvas.handle_event({"type": "pointer_down", "x": start[0], "y": start[1],
+                         "button": button, "modifiers": ()})
+    canvas.handle_event({"type": "pointer_move", "x": end[0], "y": end[1],
+                         "buttons": (button,), "modifiers": ()})
+    canvas.handle_event({"type": "pointer_up", "x": end[0], "y": end[1], "button": button,
+                         "modifiers": ()})
+
+
+def _azimuth(camera) -> float:
+    offset = np.subtract(camera.position, camera.look_at)
+    return math.degrees(math.atan2(offset[0], offset[2]))
+
+
+def test_a_left_drag_of_n_pixels_orbits_by_orbit_degrees_times_n_over_the_height(view):
+    before = view.viewer.camera
+    _drag(view, 1, (30, 40), (48, 40))                      # 18 px of a 72 px view
+    turned = _azimuth(view.viewer.camera) - _azimuth(before)
+    assert turned == pytest.approx(-camera_control.ORBIT_DEGREES * 18 / SIZE[1], abs=1e-9)
+
+
+def test_a_right_drag_pans_as_the_window_does(view):
+    before = view.viewer.camera
+    _drag(view, 2, (30, 40), (20, 52))
+    expected = camera_control.drag(before, "right", -10, 12, SIZE[1])
+    np.testing.assert_allclose(view.viewer.camera.position, expected.position, atol=1e-12)
+    np.testing.assert_allclose(view.viewer.camera.look_at, expected.look_at, atol=1e-12)
+
+
+def test_one_wheel_notch_toward_the_scene_zooms_by_zoom_per_click(view):
+    camera = view.viewer.camera
+    distance = lambda c: np.linalg.norm(np.subtract(c.position, c.look_at))
+    before = distance(camera)
+    view.canvas.handle_event({"type": "wheel", "x": 40, "y": 30, "dx": 0, "dy": -100,
+                              "modifiers": ()})
+    assert distance(view.viewer.camera) == pytest.approx(
+        before * camera_control.ZOOM_PER_CLICK, rel=1e-12)
+
+
+def test_a_w_key_flies_forward_one_key_press_worth(view):
+    from marchlab.widgets import KEY_SECONDS
+    before = view.viewer.camera
+    view.canvas.handle_event({"type": "key_down", "key": "w", "modifiers": ()})
+    expected = camera_control.fly_keys(before, {"W"}, KEY_SECONDS)
+    np.testing.assert_allclose(view.viewer.camera.position, expected.position, atol=1e-12)
+
+
+def test_the_frame_at_rest_equals_marchlab_render_within_one_level(view):
+    _drag(view, 1, (30, 40), (40, 44))
+    view.viewer._last_motion = -math.inf                      # the motion has settled
+    expected = render(view.viewer.drawn_scene(), *SIZE, backend="gpu").image()
+    assert np.abs(view.image().astype(int) - expected).max() <= 1
+
+
+def test_while_moving_the_frame_is_drawn_at_the_moving_scale(view):
+    view.canvas.handle_event({"type": "wheel", "x": 40, "y": 30, "dx": 0, "dy": -100,
+                              "modifiers": ()})
+    image = view.image()
+    assert image.shape[:2] == tuple(reversed(view.viewer.render_size()))
+    assert image.shape[0] < SIZE[1]
+
+
+def test_a_control_sets_its_field_and_the_next_frame_shows_it(view):
+    shininess = view.controls[1]
+    shininess.value = 5.0
+    assert view.viewer.scene.materials["red"].shininess == pytest.approx(5.0)
+    expected = render(view.viewer.drawn_scene(), *SIZE, backend="gpu").image()
+    assert np.abs(view.image().astype(int) - expected).max() <= 1
+    unedited = render(load_scene("classroom"), *SIZE, backend="gpu").image()
+    assert np.abs(view.image().astype(int) - unedited).max() > 1
+
+
+def test_choice_and_colour_controls_set_their_fields(view):
+    view.controls[2].value = "soft"
+    view.controls[3].value = "#00ff00"
+    assert view.viewer.scene.render.shadows == "soft"
+    assert view.viewer.scene.materials["red"].color == (0.0, 1.0, 0.0)
+
+
+def test_a_click_selects_the_object_under_the_cursor(view):
+    frame = render(load_scene("classroom"), *SIZE, backend="gpu")
+    view.image()
+    rows, cols = np.nonzero(frame.object_id > 0)              # an object other than the floor
+    y, x = rows[len(rows) // 2], cols[len(cols) // 2]
+    view.canvas.handle_event({"type": "pointer_down", "x": x + 0.5, "y": y + 0.5,
+                              "button": 1, "modifiers": ()})
+    view.canvas.handle_event({"type": "pointer_up", "x": x + 0.5, "y": y + 0.5, "button": 1,
+                              "modifiers": ()})
+    from scene_model.editing import primitive_ids
+    assert view.viewer.selection is not None
+    assert frame.object_id[y, x] in primitive_ids(view.viewer.scene, view.viewer.selection)
+
+
+def test_the_static_fallback_is_a_png_of_the_first_frame(view):
+    from PIL import Image
+    bundle = view._repr_mimebundle_()
+    data = bundle[0] if isinstance(bundle, tuple) else bundle
+    assert "application/vnd.jupyter.widget-view+json" in data
+    png = np.asarray(Image.open(io.BytesIO(base64.b64decode(data["image/png"]))))
+    expected = render(load_scene("classroom"), *SIZE, backend="gpu").image()
+    assert np.abs(png.astype(int) - expected).max() <= 1
+
+
+def test_check_against_the_reference_passes_every_gate(view):
+    result = view.check()
+    assert result.failures == [] and result.reference.shape == (SIZE[1], SIZE[0], 3)
+    assert view.verdict.value.startswith("gpu: every gate passes")
+
+
+@pytest.mark.parametrize("path", ["render.nosuch", "camera.position"])
+def test_a_control_for_a_field_that_cannot_have_one_is_refused_naming_it(path):
+    need_backend("gpu")
+    from marchlab.widgets import View
+    with pytest.raises((MarchlabError, SceneError)) as caught:
+        View("classroom", controls=[path], size=SIZE)
+    assert path.rsplit(".", 1)[-1] in str(caught.value)
