@@ -51,9 +51,10 @@ def _remote_frame_buffer():
 class _Canvas:
     """The picture and the mouse: made a jupyter-rfb `RemoteFrameBuffer` by `canvas`."""
 
-    def __init__(self, viewer: Viewer, **traits):
+    def __init__(self, viewer: Viewer, markers: bool = True, **traits):
         super().__init__(**traits)
         self.viewer = viewer
+        self.markers = markers            # mark point and spot lights (drag them to move)
         self.frame = None                 # the last gpu Frame drawn
         self.seconds = 0.0                # the last frame's render time
         self.on_draw = []                 # called with the canvas after each frame
@@ -71,6 +72,8 @@ class _Canvas:
         start = time.perf_counter()
         self.frame = render(viewer.drawn_scene(), *viewer.render_size(), backend="gpu")
         image = overlay_image(self.frame, viewer.overlay, viewer.selected_ids())
+        if self.markers:
+            image = mark_lights(image, viewer)
         self.seconds = time.perf_counter() - start
         if viewer.moving:
             self._refine_later()
@@ -134,6 +137,27 @@ class _Canvas:
             except RuntimeError:
                 return
         loop.call_later(SETTLE_SECONDS * 1.05, self.request_draw)
+
+
+MARKER_COLOR = np.array([255, 230, 50], np.uint8)
+
+
+def mark_lights(image: np.ndarray, viewer: Viewer) -> np.ndarray:
+    """``image`` with a yellow dot on each point or spot light (`Viewer.light_markers`),
+    ringed in black, sized to the picture: where to press to drag the light."""
+    height, width = image.shape[:2]
+    scale = width / viewer.size[0]
+    radius = max(2.0, 5.0 * scale)
+    rows, cols = np.mgrid[0:height, 0:width] + 0.5
+    out = image
+    for _, x, y in viewer.light_markers():
+        distance = np.hypot(cols - x * scale, rows - y * scale)
+        if distance.min() > radius + 1.5:
+            continue
+        out = out.copy() if out is image else out
+        out[distance <= radius + 1.5] = 0
+        out[distance <= radius] = MARKER_COLOR
+    return out
 
 
 def canvas(viewer: Viewer, **traits):
@@ -222,6 +246,13 @@ def _span(value, check) -> tuple[float, float]:
     return low, high
 
 
+def _png(image: np.ndarray) -> bytes:
+    from PIL import Image
+    buffer = io.BytesIO()
+    Image.fromarray(image).save(buffer, format="PNG")
+    return buffer.getvalue()
+
+
 def _hex(rgb) -> str:
     return "#" + "".join(f"{round(min(max(c, 0.0), 1.0) * 255):02x}" for c in rgb)
 
@@ -247,16 +278,19 @@ class View:
         The picture's size in pixels, width by height.
     overlay : str
         What the picture shows first: one of `marchlab.view.OVERLAYS`.
+    markers : bool
+        Mark point and spot lights with a dot (press on it and drag to move the light).
     """
 
-    def __init__(self, scene, controls=(), size=(480, 360), overlay: str = "color"):
+    def __init__(self, scene, controls=(), size=(480, 360), overlay: str = "color",
+                 markers: bool = True):
         import ipywidgets as widgets
         if overlay not in OVERLAYS:
             raise MarchlabError(f"unknown overlay {overlay!r} (one of: {', '.join(OVERLAYS)})")
         self.viewer = Viewer(scene, size)
         self.viewer.overlay = overlay
-        self.canvas = canvas(self.viewer, css_width=f"{size[0]}px", css_height=f"{size[1]}px",
-                             resizable=False)
+        self.canvas = canvas(self.viewer, markers=markers, css_width=f"{size[0]}px",
+                             css_height=f"{size[1]}px", resizable=False)
         self.controls = [field_control(self.viewer, path) for path in controls]
         for control in self.controls:
             control.observe(lambda _: self.canvas.request_draw(), names="value")
@@ -268,8 +302,10 @@ class View:
         self.check_button = widgets.Button(description="Check against the reference")
         self.check_button.on_click(lambda _: self.check())
         self.verdict = widgets.Label("")
-        self.widget = widgets.HBox([self.canvas, widgets.VBox(
-            [*self.controls, self.overlay, self.timing, self.check_button, self.verdict])])
+        self.check_images = widgets.HBox([])      # reference, gpu, difference after a check
+        self.widget = widgets.VBox([widgets.HBox([self.canvas, widgets.VBox(
+            [*self.controls, self.overlay, self.timing, self.check_button, self.verdict])]),
+            self.check_images])
         self._first_png = None
 
     def _set_overlay(self, change) -> None:
@@ -297,6 +333,14 @@ class View:
         self.verdict.value = f"gpu: {verdict}" + (
             "" if result.opencl_failures is None else
             f"; OpenCL: {'every gate passes' if not result.opencl_failures else 'FAILS'}")
+        import ipywidgets as widgets
+        pictures = [("NumPy reference", result.reference), ("gpu", result.gpu),
+                    ("difference x32", result.difference)]
+        if result.opencl is not None:
+            pictures.append(("OpenCL", result.opencl))
+        self.check_images.children = [
+            widgets.VBox([widgets.Label(name), widgets.Image(value=_png(image), format="png")])
+            for name, image in pictures]
         return result
 
     def _repr_mimebundle_(self, **kwargs):
@@ -304,10 +348,7 @@ class View:
         bundle = self.widget._repr_mimebundle_(**kwargs)
         data = bundle[0] if isinstance(bundle, tuple) else bundle
         if self._first_png is None:
-            from PIL import Image
-            buffer = io.BytesIO()
-            Image.fromarray(self.image()).save(buffer, format="PNG")
-            self._first_png = base64.b64encode(buffer.getvalue()).decode("ascii")
+            self._first_png = base64.b64encode(_png(self.image())).decode("ascii")
         data["image/png"] = self._first_png
         data["text/plain"] = f"marchlab View of {self.viewer.source}"
         return bundle

@@ -26,7 +26,8 @@ def view():
     need_backend("gpu")
     from marchlab.widgets import View
     return View("classroom", controls=["render.epsilon", "materials.red.shininess",
-                                       "render.shadows", "materials.red.color"], size=SIZE)
+                                       "render.shadows", "materials.red.color"], size=SIZE,
+                markers=False)
 
 
 def _drag(view, button, start, end):
@@ -133,10 +134,26 @@ def test_the_static_fallback_is_a_png_of_the_first_frame(view):
     assert np.abs(png.astype(int) - expected).max() <= 1
 
 
-def test_check_against_the_reference_passes_every_gate(view):
+def test_check_against_the_reference_passes_every_gate_and_shows_the_pictures(view):
     result = view.check()
     assert result.failures == [] and result.reference.shape == (SIZE[1], SIZE[0], 3)
     assert view.verdict.value.startswith("gpu: every gate passes")
+    names = [box.children[0].value for box in view.check_images.children]
+    assert names[:3] == ["NumPy reference", "gpu", "difference x32"]
+
+
+def test_lights_are_marked_and_a_drag_from_a_mark_moves_the_light():
+    need_backend("gpu")
+    from marchlab.widgets import MARKER_COLOR, View
+    view = View("lights", size=(192, 144))
+    index, x, y = next((i, x, y) for i, x, y in view.viewer.light_markers()
+                       if 0 <= x < 192 and 0 <= y < 144)        # a light inside the view
+    image = view.image()
+    assert (image[int(y), int(x)] == MARKER_COLOR).all()
+    _drag(view, 1, (x, y), (x - 20, y + 10))
+    from scene_model.camera import project
+    moved = project(view.viewer.camera, [view.viewer.scene.lights[index].position], 192, 144)
+    assert tuple(moved[0][:2]) == pytest.approx((x - 20, y + 10), abs=1e-6)
 
 
 @pytest.mark.parametrize("path", ["render.nosuch", "camera.position"])
