@@ -1,6 +1,8 @@
 # The README's two commands, for a fresh Debian machine:
 #   make demo   set up .venv, install marchlab, render the classroom scene to out/classroom.png
 #   make test   set up .venv with the test extras and run the whole suite
+# and the lessons:
+#   make lessons   set up .venv and open the lessons in JupyterLab (on 127.0.0.1 only)
 # and the documentation site:
 #   make docs   run every lesson and build the site into docs/_build/html (warnings are errors)
 #   make speed-vs-error   rerun the speed-against-error benchmark (minutes) into the docs:
@@ -19,7 +21,7 @@ BIN := $(VENV)/bin
 # Xvfb, a display in memory, for the tests of the `marchlab view` window (pytest-xvfb starts it).
 SYSTEM_PACKAGES := libegl1 libegl-mesa0 libgl1-mesa-dri pocl-opencl-icd ocl-icd-libopencl1 xvfb
 
-.PHONY: demo test docs speed-vs-error system-packages clean
+.PHONY: demo test lessons docs speed-vs-error system-packages clean
 
 # The first line says which backends render here and why the others cannot; the NumPy
 # reference renders the demo everywhere.
@@ -40,6 +42,11 @@ test: $(VENV)/.installed-test
 	$(BIN)/lint-imports
 	MARCHLAB_REQUIRE_BACKENDS=$(MARCHLAB_REQUIRE_BACKENDS) MARCHLAB_REQUIRE_VIEW=$(MARCHLAB_REQUIRE_VIEW) \
 	  $(BIN)/python -m pytest
+
+# JupyterLab (in the lessons extra) serves this machine only; as root it must be told it may.
+lessons: $(VENV)/.installed
+	$(BIN)/jupyter lab --ip=127.0.0.1 --ServerApp.root_dir=lessons \
+	  $$([ "$$(id -u)" = 0 ] && echo --allow-root)
 
 # The test environment holds the docs extra and everything the lessons import, which the
 # site executes (sphinx-build -D nb_execution_mode=off skips that, as tests/test_docs_site.py does).

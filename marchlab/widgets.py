@@ -51,9 +51,10 @@ def _remote_frame_buffer():
 class _Canvas:
     """The picture and the mouse: made a jupyter-rfb `RemoteFrameBuffer` by `canvas`."""
 
-    def __init__(self, viewer: Viewer, markers: bool = True, **traits):
+    def __init__(self, viewer: Viewer, markers: bool = True, backend: str = "gpu", **traits):
         super().__init__(**traits)
         self.viewer = viewer
+        self.backend = backend
         self.markers = markers            # mark point and spot lights (drag them to move)
         self.frame = None                 # the last gpu Frame drawn
         self.seconds = 0.0                # the last frame's render time
@@ -64,13 +65,13 @@ class _Canvas:
     # --- jupyter-rfb's two methods ------------------------------------------------------
 
     def get_frame(self) -> np.ndarray:
-        """The view, rendered now by the gpu backend (at reduced resolution while it
+        """The view, rendered now by the canvas's backend (at reduced resolution while it
         moves) and encoded as `marchlab render` encodes a frame: (H, W, 3) uint8."""
         from gpu_shader.display import overlay_image
         from .render import render
         viewer = self.viewer
         start = time.perf_counter()
-        self.frame = render(viewer.drawn_scene(), *viewer.render_size(), backend="gpu")
+        self.frame = render(viewer.drawn_scene(), *viewer.render_size(), backend=self.backend)
         image = overlay_image(self.frame, viewer.overlay, viewer.selected_ids())
         if self.markers:
             image = mark_lights(image, viewer)
@@ -280,17 +281,27 @@ class View:
         What the picture shows first: one of `marchlab.view.OVERLAYS`.
     markers : bool
         Mark point and spot lights with a dot (press on it and drag to move the light).
+    backend : str, optional
+        The backend that draws the picture; by default the fastest here
+        (`marchlab.render.fastest_backend`: the gpu backend where it runs).
     """
 
     def __init__(self, scene, controls=(), size=(480, 360), overlay: str = "color",
-                 markers: bool = True):
+                 markers: bool = True, backend: str | None = None):
         import ipywidgets as widgets
         if overlay not in OVERLAYS:
             raise MarchlabError(f"unknown overlay {overlay!r} (one of: {', '.join(OVERLAYS)})")
         self.viewer = Viewer(scene, size)
         self.viewer.overlay = overlay
-        self.canvas = canvas(self.viewer, markers=markers, css_width=f"{size[0]}px",
-                             css_height=f"{size[1]}px", resizable=False)
+        from IPython.utils.capture import capture_output
+        from .render import fastest_backend
+        # jupyter-rfb displays an output area of its own (for errors in its callbacks) when
+        # a canvas is made; it goes into this view's layout instead, so that a notebook saved
+        # without widgets shows the PNG below and not "RFBOutputContext()".
+        with capture_output(display=True):
+            self.canvas = canvas(self.viewer, markers=markers,
+                                 backend=backend or fastest_backend(), css_width=f"{size[0]}px",
+                                 css_height=f"{size[1]}px", resizable=False)
         self.controls = [field_control(self.viewer, path) for path in controls]
         for control in self.controls:
             control.observe(lambda _: self.canvas.request_draw(), names="value")
@@ -305,7 +316,7 @@ class View:
         self.check_images = widgets.HBox([])      # reference, gpu, difference after a check
         self.widget = widgets.VBox([widgets.HBox([self.canvas, widgets.VBox(
             [*self.controls, self.overlay, self.timing, self.check_button, self.verdict])]),
-            self.check_images])
+            self.check_images, self.canvas._output_context])
         self._first_png = None
 
     def _set_overlay(self, change) -> None:
@@ -325,16 +336,16 @@ class View:
         equivalence gates' verdict (`Viewer.check_against_reference`); returns it."""
         from .render import render
         viewer = self.viewer
-        gpu = render(viewer.drawn_scene(), *viewer.rest_size(), backend="gpu",
-                     path_labels=True)
-        viewer.check_against_reference(gpu, background=False)
+        shown = render(viewer.drawn_scene(), *viewer.rest_size(), backend=self.canvas.backend,
+                       path_labels=True)
+        viewer.check_against_reference(shown, background=False)
         result = viewer.check
         verdict = "every gate passes" if not result.failures else "; ".join(result.failures)
-        self.verdict.value = f"gpu: {verdict}" + (
+        self.verdict.value = f"{self.canvas.backend}: {verdict}" + (
             "" if result.opencl_failures is None else
             f"; OpenCL: {'every gate passes' if not result.opencl_failures else 'FAILS'}")
         import ipywidgets as widgets
-        pictures = [("NumPy reference", result.reference), ("gpu", result.gpu),
+        pictures = [("NumPy reference", result.reference), (self.canvas.backend, result.gpu),
                     ("difference x32", result.difference)]
         if result.opencl is not None:
             pictures.append(("OpenCL", result.opencl))

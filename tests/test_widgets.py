@@ -163,3 +163,19 @@ def test_a_control_for_a_field_that_cannot_have_one_is_refused_naming_it(path):
     with pytest.raises((MarchlabError, SceneError)) as caught:
         View("classroom", controls=[path], size=SIZE)
     assert path.rsplit(".", 1)[-1] in str(caught.value)
+
+
+def test_a_saved_notebook_holds_one_output_for_a_view_with_a_png_of_its_first_frame(tmp_path):
+    need_backend("gpu")
+    nbformat = pytest.importorskip("nbformat")
+    from nbclient import NotebookClient
+    from PIL import Image
+    notebook = nbformat.v4.new_notebook()
+    notebook.cells = [nbformat.v4.new_code_cell(
+        'from marchlab.widgets import View\nView("csg", size=(96, 72), markers=False)')]
+    NotebookClient(notebook, timeout=120, kernel_name="python3").execute()
+    outputs = notebook.cells[0].outputs
+    assert len(outputs) == 1, [o.get("data", {}).get("text/plain") for o in outputs]
+    png = base64.b64decode(outputs[0]["data"]["image/png"])
+    expected = render(load_scene("csg"), 96, 72, backend="gpu").image()
+    assert np.abs(np.asarray(Image.open(io.BytesIO(png))).astype(int) - expected).max() <= 1
