@@ -16,7 +16,7 @@ from .bodies import Body, PhysicsSettings, body_sphere
 from .errors import SceneError
 from .fields import (DIRECTION, POINT, SIZE, Color, Range, Record, Vec3, color_range, number_text,
                      param, unit_interval)
-from .shapes import Node, primitives
+from .shapes import Node, children, primitives
 
 
 @dataclass(frozen=True)
@@ -233,6 +233,38 @@ class Scene(Record):
     physics: PhysicsSettings | None = param(None, "How bodies are simulated; absent: the "
                                                   "defaults of [physics].")
     bodies: tuple[Body, ...] = param((), "Dynamic spheres, simulated and drawn.")
+
+    def _repr_html_(self) -> str:
+        """A notebook shows a scene as a short summary (its objects as a tree, its lights and
+        materials with colour swatches, the main render settings), not as every field: the
+        model renders nothing itself, so ``marchlab.render(scene, ...)`` draws it."""
+        from html import escape
+
+        def swatch(color):
+            rgb = ",".join(str(round(min(max(c, 0.0), 1.0) * 255)) for c in color)
+            return (f'<span style="display:inline-block;width:0.9em;height:0.9em;'
+                    f'background:rgb({rgb});border:1px solid #888"></span>')
+
+        def tree(node, depth=0):
+            material = getattr(node, "material", None)
+            line = "&nbsp;" * 4 * depth + escape(node.kind) + (
+                f" <i>{escape(material)}</i>" if material else "")
+            return [line] + [row for child in children(node) for row in tree(child, depth + 1)]
+
+        r = self.render
+        rows = [f"<b>{escape(self.description or 'scene')}</b>",
+                "objects:<br>" + "<br>".join(row for node in self.objects
+                                             for row in tree(node)),
+                "lights: " + ", ".join(f"{swatch(light.color)} {escape(light.kind)}"
+                                       for light in self.lights),
+                "materials: " + ", ".join(f"{swatch(m.color)} {escape(name)}"
+                                          for name, m in self.materials.items()),
+                f"render: {escape(r.shading)} shading, {escape(r.shadows)} shadows, "
+                f"reflection depth {r.reflection_depth}, epsilon {r.epsilon:g}, "
+                f"max_steps {r.max_steps}"]
+        if self.bodies:
+            rows.append(f"bodies: {len(self.bodies)}")
+        return '<div style="font-family:monospace">' + "<br>".join(rows) + "</div>"
 
     def check(self):
         known = ", ".join(sorted(self.materials)) or "none"

@@ -25,3 +25,12 @@ def test_a_frames_repr_is_one_line_with_its_size_backend_and_hits():
     text = repr(frame)
     assert "\n" not in text and len(text) < 100
     assert text == f"Frame(16x12, numpy float64, {int(frame.hit.sum())} of 192 pixels hit)"
+
+
+def test_a_scene_shows_itself_in_a_notebook_as_a_short_summary_naming_its_parts():
+    from scene_model.scenefile import load_scene
+    scene = load_scene("csg")
+    html = scene._repr_html_()
+    assert html.count("<br>") < 40                       # a summary, not every field
+    for part in ("smooth_union", "subtraction", "torus", "clay", "steel", "point"):
+        assert part in html
