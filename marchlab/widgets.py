@@ -363,3 +363,130 @@ class View:
         data["image/png"] = self._first_png
         data["text/plain"] = f"marchlab View of {self.viewer.source}"
         return bundle
+
+
+# --- physics ---------------------------------------------------------------------------------
+
+TICK_SECONDS = 1 / 30      # how often a playing physics view advances and draws
+
+
+def sparkline(values: np.ndarray, size=(240, 60), color=(40, 90, 200)) -> np.ndarray:
+    """``values`` (N,) as a line across an (H, W, 3) uint8 picture of ``size`` (W, H), the
+    smallest value at the bottom and the largest at the top: a live plot too cheap to
+    matter beside the render (no plotting library per frame)."""
+    width, height = size
+    image = np.full((height, width, 3), 255, np.uint8)
+    values = np.asarray(values, np.float64)
+    if len(values) < 2:
+        return image
+    low, high = values.min(), values.max()
+    span = high - low if high > low else 1.0
+    columns = np.linspace(0, width - 1, len(values))
+    rows = (height - 1) - (values - low) / span * (height - 1)
+    x = np.arange(width)
+    y = np.interp(x, columns, rows)
+    for column, row in zip(x, np.rint(y).astype(int)):
+        image[max(row - 1, 0):row + 1, column] = color
+    return image
+
+
+class PhysicsView(View):
+    """`View` of a scene with bodies, and its physics playing: play/pause, step, reset,
+    kick; restitution, friction and gravity sliders; the energy plotted as it plays. The
+    simulation steps with its fixed dt (`marchlab.playback.Playback`), however often the
+    notebook draws; a left drag on a ball throws it.
+
+    Parameters are `View`'s; the scene must have ``[[bodies]]``.
+    """
+
+    def __init__(self, scene, controls=(), size=(480, 360), **options):
+        import ipywidgets as widgets
+        super().__init__(scene, controls, size, **options)
+        playback = self.viewer.playback
+        if playback is None:
+            raise MarchlabError(f"{self.viewer.source}: a physics view needs a scene with "
+                                "[[bodies]]")
+        self.play_button = widgets.Button(description="Play")
+        self.step_button = widgets.Button(description="Step")
+        self.reset_button = widgets.Button(description="Reset")
+        self.kick_button = widgets.Button(description="Kick")
+        self.play_button.on_click(lambda _: self.toggle())
+        self.step_button.on_click(lambda _: self._then_draw(self.viewer.playback.step))
+        self.reset_button.on_click(lambda _: self._then_draw(self.reset))
+        self.kick_button.on_click(lambda _: self._then_draw(self.viewer.playback.kick, 1.0))
+        settings = playback.settings
+        self.restitution = widgets.FloatSlider(value=settings.restitution, min=0.0, max=1.0,
+                                               step=0.01, description="restitution")
+        self.friction = widgets.FloatSlider(value=settings.friction, min=0.0, max=1.0,
+                                            step=0.01, description="friction")
+        self.gravity = widgets.FloatSlider(value=settings.gravity[1], min=-20.0, max=0.0,
+                                           step=0.1, description="gravity y (m s^-2)")
+        self.restitution.observe(lambda c: self._then_draw(
+            self.viewer.playback.set_restitution, c["new"]), names="value")
+        self.friction.observe(lambda c: self._then_draw(
+            self.viewer.playback.set_friction, c["new"]), names="value")
+        self.gravity.observe(lambda c: self._then_draw(
+            self.viewer.playback.set_gravity,
+            (settings.gravity[0], c["new"], settings.gravity[2])), names="value")
+        self.clock = widgets.Label("")
+        self.energy_plot = widgets.Image(format="png")
+        self.widget.children = (*self.widget.children, widgets.HBox(
+            [widgets.VBox([widgets.HBox([self.play_button, self.step_button,
+                                         self.reset_button, self.kick_button]),
+                           self.restitution, self.friction, self.gravity, self.clock]),
+             widgets.VBox([widgets.Label("energy (J)"), self.energy_plot])]))
+        self._handle = None
+        self._show_state()
+
+    def toggle(self) -> None:
+        """Play if paused, pause if playing."""
+        playback = self.viewer.playback
+        if playback.playing:
+            playback.pause()
+        else:
+            playback.play()
+            self._schedule()
+        self.play_button.description = "Pause" if playback.playing else "Play"
+
+    def reset(self) -> None:
+        """Back to the scene as written, sliders too."""
+        playback = self.viewer.playback
+        playback.reset()
+        settings = playback.settings
+        self.restitution.value, self.friction.value = settings.restitution, settings.friction
+        self.gravity.value = settings.gravity[1]
+
+    def tick(self, seconds: float = TICK_SECONDS) -> None:
+        """One beat of the clock: ``seconds`` of wall time pass, the physics takes the fixed
+        steps they hold (`Playback.advance`), and the picture is drawn again."""
+        self.viewer.advance(seconds)
+        self._show_state()
+        self.canvas.request_draw()
+
+    def _schedule(self) -> None:
+        import asyncio
+        try:
+            loop = asyncio.get_event_loop()
+        except RuntimeError:
+            return
+        self._handle = loop.call_later(TICK_SECONDS, self._beat)
+
+    def _beat(self) -> None:
+        if self.viewer.playback.playing:
+            self.tick(TICK_SECONDS)
+            self._schedule()
+
+    def _then_draw(self, action, *args) -> None:
+        try:
+            action(*args)
+        except MarchlabError as err:
+            self.verdict.value = str(err)
+        self._show_state()
+        self.canvas.request_draw()
+
+    def _show_state(self) -> None:
+        playback = self.viewer.playback
+        self.clock.value = (f"t = {playback.time:.3f} s, {playback.steps} steps of "
+                            f"{playback.settings.dt:g} s")
+        history = playback.history
+        self.energy_plot.value = _png(sparkline(history[:, 1] if len(history) else []))

@@ -179,3 +179,74 @@ def test_a_saved_notebook_holds_one_output_for_a_view_with_a_png_of_its_first_fr
     png = base64.b64decode(outputs[0]["data"]["image/png"])
     expected = render(load_scene("csg"), 96, 72, backend="gpu").image()
     assert np.abs(np.asarray(Image.open(io.BytesIO(png))).astype(int) - expected).max() <= 1
+
+
+# --- the physics view ------------------------------------------------------------------------
+
+@pytest.fixture
+def physics_view():
+    need_backend("gpu")
+    from marchlab.widgets import PhysicsView
+    return PhysicsView("bounce", size=SIZE, markers=False)
+
+
+def test_a_paused_physics_view_takes_one_fixed_step_per_step_press(physics_view):
+    playback = physics_view.viewer.playback
+    physics_view.step_button.click()
+    assert playback.steps == 1 and playback.time == pytest.approx(playback.settings.dt)
+    physics_view.tick(0.5)                                   # paused: time does not pass
+    assert playback.steps == 1
+
+
+def test_playing_advances_whole_fixed_steps_of_the_wall_time_and_draws_the_bodies_there(
+        physics_view):
+    playback = physics_view.viewer.playback
+    physics_view.play_button.click()
+    assert playback.playing and physics_view.play_button.description == "Pause"
+    physics_view.tick(0.1)
+    dt = playback.settings.dt
+    assert playback.steps == int(0.1 / dt + 1e-9) and playback.time == pytest.approx(
+        playback.steps * dt)
+    expected = render(physics_view.viewer.drawn_scene(), *SIZE, backend="gpu").image()
+    physics_view.viewer._last_motion = -math.inf
+    assert np.abs(physics_view.image().astype(int) - expected).max() <= 1
+    physics_view.play_button.click()
+    assert not playback.playing
+
+
+def test_the_sliders_set_restitution_friction_and_gravity_and_reset_puts_them_back(
+        physics_view):
+    playback = physics_view.viewer.playback
+    physics_view.restitution.value = 0.3
+    physics_view.friction.value = 0.6
+    physics_view.gravity.value = -4.0
+    assert playback.settings.restitution == pytest.approx(0.3)
+    assert playback.settings.friction == pytest.approx(0.6)
+    assert playback.settings.gravity[1] == pytest.approx(-4.0)
+    physics_view.reset_button.click()
+    scene_settings = load_scene("bounce").physics
+    assert physics_view.restitution.value == pytest.approx(scene_settings.restitution)
+    assert playback.time == 0.0
+
+
+def test_kick_changes_the_velocities_and_no_time_passes(physics_view):
+    playback = physics_view.viewer.playback
+    before = playback.world.velocity.copy()
+    physics_view.kick_button.click()
+    assert playback.time == 0.0
+    assert not np.allclose(playback.world.velocity, before)
+
+
+def test_the_energy_sparkline_spans_the_picture_from_lowest_to_highest():
+    from marchlab.widgets import sparkline
+    image = sparkline(np.array([0.0, 1.0, 0.5]), size=(30, 10))
+    inked = np.nonzero((image != 255).any(axis=-1))
+    assert inked[1].min() == 0 and inked[1].max() == 29      # across the whole width
+    assert inked[0].min() == 0 and inked[0].max() == 9       # from the top to the bottom
+
+
+def test_a_physics_view_of_a_scene_without_bodies_is_refused_in_one_line():
+    need_backend("gpu")
+    from marchlab.widgets import PhysicsView
+    with pytest.raises(MarchlabError, match="needs a scene with"):
+        PhysicsView("csg", size=SIZE)
