@@ -24,6 +24,7 @@ extensions = [
     "sphinx.ext.autodoc",
     "sphinx.ext.napoleon",      # numpydoc-style docstrings
     "sphinx.ext.mathjax",
+    "sphinx-mathjax-offline",   # MathJax served from the site itself: formulas render offline
     "sphinx.ext.viewcode",      # [source] links: the code behind every formula
     "marchlab_sphinx",          # the generated parts (CLI, API, scene fields, lessons)
 ]
@@ -41,6 +42,11 @@ nb_execution_mode = "force"
 nb_execution_timeout = 600      # seconds per cell; the NumPy reference renders in seconds
 nb_execution_show_tb = True     # a failing lesson prints its traceback in the build log
 nb_execution_allow_errors = False
+# No widget JavaScript from a CDN (require.js, the widget manager): a saved widget shows the
+# picture it leaves in its output instead (marchlab.widgets.View's first frame).
+nb_ipywidgets_js = {}
+nb_mime_priority_overrides = [(builder, "application/vnd.jupyter.widget-view+json", None)
+                              for builder in ("html", "dirhtml", "singlehtml")]
 
 # --- API reference ------------------------------------------------------------------------------
 autodoc_member_order = "bysource"   # the order a student reads the module in

@@ -125,3 +125,25 @@ def test_every_lesson_notebook_is_rendered_and_listed(site):
     for notebook in lessons:
         assert (site / "lessons" / f"{notebook.stem}.html").is_file(), notebook.name
         assert f'href="lessons/{notebook.stem}.html"' in index, notebook.name
+
+
+CDN = re.compile(r"""(?:src|href)\s*=\s*["']?(?:https?:)?//[^"'\s>]*"""
+                 r"""(?:cdn|unpkg|jsdelivr|mathjax|require(?:js)?\b)[^"'\s>]*""", re.I)
+
+
+def test_no_page_loads_a_script_or_style_from_a_cdn(site):
+    offenders = {}
+    for page in site.rglob("*.html"):
+        found = CDN.findall(page.read_text(encoding="utf-8", errors="replace"))
+        if found:
+            offenders[str(page.relative_to(site))] = found[:3]
+    assert offenders == {}
+
+
+def test_mathjax_is_served_from_the_site_itself(site):
+    page = (site / "sphere-tracing.html").read_text(encoding="utf-8")
+    scripts = re.findall(r"<script[^>]*src=\"([^\"]*mathjax[^\"]*)\"", page, re.I)
+    assert scripts, "the formulas' page loads no MathJax"
+    for source in scripts:
+        assert not re.match(r"(https?:)?//", source), source
+        assert (site / source.split("?")[0]).resolve().is_file(), source
