@@ -114,3 +114,18 @@ def test_strip_removes_outputs_counts_and_widget_state_and_keeps_the_cells(tmp_p
     assert stripped.cells[1].outputs == [] and stripped.cells[1].execution_count is None
     assert "execution" not in stripped.cells[1].metadata and "widgets" not in stripped.metadata
     assert strip.main(["--check", str(path)]) == 0
+
+
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=lesson_id)
+def test_lesson_title_is_in_the_one_style_with_its_number(path):
+    title = nbformat.read(path, as_version=4).cells[0].source.splitlines()[0]
+    number = int(path.name.split("_")[0])
+    assert title.startswith(f"# Lesson {number} — "), title
+
+
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=lesson_id)
+def test_lesson_has_a_live_view_to_try(path):
+    cells = nbformat.read(path, as_version=4).cells
+    assert any(cell.cell_type == "markdown" and "Try it" in cell.source for cell in cells)
+    assert any(cell.cell_type == "code" and "from marchlab.widgets import" in cell.source
+               for cell in cells)
