@@ -33,11 +33,11 @@ def test_ctrl_c_during_a_render_leaves_no_file_and_exits_130(tmp_path, capsys, m
     from reference_cpu.render import Tracer
     real_trace, calls = Tracer.trace, []
 
-    def trace_then_interrupt(self, origin, directions):
+    def trace_then_interrupt(self, origin, directions, *rest):
         calls.append(len(directions))
         if len(calls) == 2:                       # the second block of rays
             raise KeyboardInterrupt
-        return real_trace(self, origin, directions)
+        return real_trace(self, origin, directions, *rest)
 
     monkeypatch.setattr(Tracer, "trace", trace_then_interrupt)
     monkeypatch.setattr("reference_cpu.render.BLOCK_RAYS", 8)
