@@ -19,7 +19,8 @@ BIN := $(VENV)/bin
 # (with the ICD loader) for the OpenCL backend: the PoCL wheel from PyPI cannot build
 # kernels on some CPUs ("unknown target CPU 'generic'"), Debian's can.
 # Xvfb, a display in memory, for the tests of the `marchlab view` window (pytest-xvfb starts it).
-SYSTEM_PACKAGES := libegl1 libegl-mesa0 libgl1-mesa-dri pocl-opencl-icd ocl-icd-libopencl1 xvfb
+# Chromium, which Playwright drives (no browser download) for the notebook view's browser test.
+SYSTEM_PACKAGES := libegl1 libegl-mesa0 libgl1-mesa-dri pocl-opencl-icd ocl-icd-libopencl1 xvfb chromium
 
 .PHONY: demo test lessons docs speed-vs-error system-packages clean
 
@@ -36,12 +37,14 @@ MARCHLAB_REQUIRE_BACKENDS := gpu,opencl
 # The `marchlab view` window's tests (tests/view) must run too: imgui-bundle, and Xvfb started
 # by pytest-xvfb. Without a display: make test MARCHLAB_REQUIRE_VIEW=
 MARCHLAB_REQUIRE_VIEW := 1
+# The notebook view's browser test (tests/browser) must run too: Chromium, Playwright, Voila.
+MARCHLAB_REQUIRE_BROWSER := 1
 
 test: $(VENV)/.installed-test
 	@$(BIN)/marchlab doctor --brief
 	$(BIN)/lint-imports
 	MARCHLAB_REQUIRE_BACKENDS=$(MARCHLAB_REQUIRE_BACKENDS) MARCHLAB_REQUIRE_VIEW=$(MARCHLAB_REQUIRE_VIEW) \
-	  $(BIN)/python -m pytest
+	  MARCHLAB_REQUIRE_BROWSER=$(MARCHLAB_REQUIRE_BROWSER) $(BIN)/python -m pytest
 
 # JupyterLab (in the lessons extra) serves this machine only; as root it must be told it may.
 lessons: $(VENV)/.installed

@@ -26,7 +26,8 @@ from .render import BACKENDS, backend_problem
 # needs beyond NumPy.
 APT_PACKAGES = {"gpu": ("libegl1", "libegl-mesa0", "libgl1-mesa-dri"),
                 "opencl": ("pocl-opencl-icd", "ocl-icd-libopencl1"),
-                "view": ("xvfb",)}    # a display in memory: headless `marchlab view`, its tests
+                "view": ("xvfb",),    # a display in memory: headless `marchlab view`, its tests
+                "lessons": ("chromium",)}   # the notebook view's browser test (Playwright)
 PYTHON_MODULES = {"gpu": ("moderngl",), "opencl": ("pyopencl",)}
 
 
