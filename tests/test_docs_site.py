@@ -147,3 +147,44 @@ def test_mathjax_is_served_from_the_site_itself(site):
     for source in scripts:
         assert not re.match(r"(https?:)?//", source), source
         assert (site / source.split("?")[0]).resolve().is_file(), source
+
+
+def test_formulas_render_offline_in_a_browser_with_the_network_blocked(site):
+    # Debian's Chromium, driven by Playwright, opens a maths page from disk with every
+    # request off this machine refused: MathJax (served by the site) must typeset its
+    # formulas, with no MathJax error and no raw TeX left on the page.
+    import shutil
+    playwright = pytest.importorskip("playwright.sync_api", reason="the dev extra")
+    chromium = next((shutil.which(n) for n in ("chromium", "chromium-browser")
+                     if shutil.which(n)), None)
+    if chromium is None:
+        import os
+        if os.environ.get("MARCHLAB_REQUIRE_BROWSER"):
+            pytest.fail("no chromium here (required by MARCHLAB_REQUIRE_BROWSER=1)",
+                        pytrace=False)
+        pytest.skip("no chromium here (apt-get install chromium)")
+    blocked = []
+    with playwright.sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=chromium, args=["--no-sandbox"])
+        try:
+            page = browser.new_page()
+
+            def only_local(route):
+                if route.request.url.startswith("file:"):
+                    return route.continue_()
+                blocked.append(route.request.url)
+                return route.abort()
+
+            page.route("**/*", only_local)
+            page.goto((site / "sphere-tracing.html").as_uri())
+            page.wait_for_selector("mjx-container", timeout=60_000)
+            page.wait_for_timeout(1000)
+            typeset = page.locator("mjx-container").count()
+            errors = page.locator("mjx-merror").count()
+            text = page.inner_text("article") if page.locator("article").count() else ""
+        finally:
+            browser.close()
+    assert typeset >= 10
+    assert errors == 0
+    assert "\\frac" not in text and "\\varepsilon" not in text
+    assert blocked == []                        # it asked for nothing off this machine
