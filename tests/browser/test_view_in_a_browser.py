@@ -32,12 +32,14 @@ SIZE = (240, 180)
 
 NOTEBOOK = '''import json
 from marchlab.widgets import View
-view = View("classroom", size=({width}, {height}), markers=False)
+view = View("classroom", controls=["render.max_steps"], size=({width}, {height}),
+            markers=False)
 
 def note(canvas):
     camera = view.viewer.camera
     with open("camera.json", "w") as file:
         json.dump({{"position": list(camera.position), "look_at": list(camera.look_at),
+                   "max_steps": view.viewer.scene.render.max_steps,
                    "drawn": [canvas.frame.width, canvas.frame.height],
                    "view": list(view.viewer.size)}}, file)
 
@@ -131,10 +133,9 @@ def _screenshot(element) -> np.ndarray:
     return np.asarray(Image.open(io.BytesIO(element.screenshot())).convert("RGB")).astype(int)
 
 
-def test_a_drag_in_the_browser_orbits_and_shows_the_gpu_frame_for_the_new_camera(voila):
+def test_a_drag_and_a_slider_in_the_browser_show_the_gpu_frame_of_the_edited_view(voila):
     from playwright.sync_api import sync_playwright
     from marchlab.camera_control import ORBIT_DEGREES
-    from marchlab.render import render
     from scene_model.scenefile import load_scene
     url, folder, chromium = voila
     with sync_playwright() as playwright:
@@ -160,6 +161,15 @@ def test_a_drag_in_the_browser_orbits_and_shows_the_gpu_frame_for_the_new_camera
                 _azimuth(state) - _azimuth(first)) > 1 and state["drawn"] == [width, height])
             time.sleep(1.5)                               # the full-resolution PNG arrives
             after = _screenshot(image)
+            # The max_steps slider, set by typing into its readout as a person can.
+            page.locator(".widget-readout").first.click()
+            page.keyboard.press("Control+A")
+            page.keyboard.type("24")
+            page.keyboard.press("Enter")
+            stepped = _camera_file(folder, lambda state: state["max_steps"] == 24
+                                   and state["drawn"] == [width, height])
+            time.sleep(1.5)
+            fewer_steps = _screenshot(image)
         finally:
             browser.close()
     # The kernel's camera turned by the window's orbit mapping (ImGui's drag threshold does
@@ -172,9 +182,20 @@ def test_a_drag_in_the_browser_orbits_and_shows_the_gpu_frame_for_the_new_camera
     scene = load_scene("classroom")
     camera = dataclasses.replace(scene.camera, position=tuple(moved["position"]),
                                  look_at=tuple(moved["look_at"]))
-    expected = render(dataclasses.replace(scene, camera=camera), width, height,
-                      backend="gpu").image().astype(int)
-    inner = after[(after.shape[0] - height) // 2:][:height,
-                  (after.shape[1] - width) // 2:][:, :width]
+    _assert_shows(after, dataclasses.replace(scene, camera=camera), width, height)
+    # ... and after the slider, the frame of the same camera with max_steps 24.
+    assert stepped["position"] == moved["position"]
+    fewer = load_scene("classroom", ["render.max_steps=24"])
+    _assert_shows(fewer_steps, dataclasses.replace(fewer, camera=camera), width, height)
+    assert np.abs(fewer_steps - after).mean() > 1             # the picture changed
+
+
+def _assert_shows(screenshot, scene, width, height):
+    """The screenshot of the view's element holds the gpu backend's frame of ``scene`` at
+    the size the browser gave the view (inside the element's 1 px border)."""
+    from marchlab.render import render
+    expected = render(scene, width, height, backend="gpu").image().astype(int)
+    top, left = (screenshot.shape[0] - height) // 2, (screenshot.shape[1] - width) // 2
+    inner = screenshot[top:top + height, left:left + width]
     close = np.abs(inner - expected).max(axis=-1) <= 2
     assert close.mean() > 0.995, f"{close.mean():.4f} of the pixels match"
