@@ -9,7 +9,8 @@ JPEG while moving and PNG at rest). Left drag orbits, right drag pans, the wheel
 W A S D Q E fly, with the mapping of the ``marchlab view`` window (`marchlab.camera_control`,
 through the same `marchlab.view.Viewer`). Beside the picture: a slider or picker for each
 field named in ``controls``, the overlay (colour, steps heat map, depth, normals, object
-ids), the time the last frame took, and "Check against the reference".
+ids), the shading mode, the backend that draws it, the time the last frame took, and "Check
+against the reference".
 
 Saved or shown without a kernel (nbconvert, the docs site, GitHub), a View shows a PNG of its
 first frame instead of the widget's text.
@@ -302,12 +303,19 @@ class View:
             self.canvas = canvas(self.viewer, markers=markers,
                                  backend=backend or fastest_backend(), css_width=f"{size[0]}px",
                                  css_height=f"{size[1]}px", resizable=False)
+        # The shading mode is always offered; a lesson's own controls come first.
+        controls = list(controls) + ["render.shading"] * ("render.shading" not in controls)
         self.controls = [field_control(self.viewer, path) for path in controls]
         for control in self.controls:
             control.observe(lambda _: self.canvas.request_draw(), names="value")
         self.overlay = widgets.Dropdown(options=list(OVERLAYS), value=overlay,
                                         description="overlay")
         self.overlay.observe(self._set_overlay, names="value")
+        from .render import BACKENDS, backend_problem
+        self.backend = widgets.Dropdown(
+            options=[name for name in BACKENDS if backend_problem(name) is None],
+            value=self.canvas.backend, description="backend")
+        self.backend.observe(self._set_backend, names="value")
         self.timing = widgets.Label("")
         self.canvas.on_draw.append(self._show_timing)
         self.check_button = widgets.Button(description="Check against the reference")
@@ -315,7 +323,8 @@ class View:
         self.verdict = widgets.Label("")
         self.check_images = widgets.HBox([])      # reference, gpu, difference after a check
         self.widget = widgets.VBox([widgets.HBox([self.canvas, widgets.VBox(
-            [*self.controls, self.overlay, self.timing, self.check_button, self.verdict])]),
+            [*self.controls, self.overlay, self.backend, self.timing, self.check_button,
+             self.verdict])]),
             self.check_images, self.canvas._output_context])
         self._first_png = None
 
@@ -323,9 +332,15 @@ class View:
         self.viewer.overlay = change["new"]
         self.canvas.request_draw()
 
+    def _set_backend(self, change) -> None:
+        """Draw with another backend: the same view, computed another way."""
+        self.canvas.backend = change["new"]
+        self.canvas.request_draw()
+
     def _show_timing(self, canvas) -> None:
         width, height = canvas.frame.width, canvas.frame.height
-        self.timing.value = f"{canvas.seconds * 1e3:.0f} ms a frame at {width}x{height}"
+        self.timing.value = (f"{canvas.seconds * 1e3:.0f} ms a frame at {width}x{height} "
+                             f"({canvas.backend})")
 
     def image(self) -> np.ndarray:
         """The picture as it stands, (H, W, 3) uint8 (a frame drawn now)."""

@@ -250,3 +250,19 @@ def test_a_physics_view_of_a_scene_without_bodies_is_refused_in_one_line():
     from marchlab.widgets import PhysicsView
     with pytest.raises(MarchlabError, match="needs a scene with"):
         PhysicsView("csg", size=SIZE)
+
+
+def test_every_view_offers_the_shading_mode_and_the_backends_that_run_here(view):
+    from marchlab.render import BACKENDS, backend_problem
+    assert view.controls[-1].description == "shading"
+    view.controls[-1].value = "normals"
+    assert view.viewer.scene.render.shading == "normals"
+    assert list(view.backend.options) == [b for b in BACKENDS if backend_problem(b) is None]
+
+
+def test_flipping_the_backend_draws_the_same_view_with_the_reference(view):
+    view.backend.value = "numpy"
+    view.viewer._last_motion = -math.inf
+    expected = render(view.viewer.drawn_scene(), *SIZE, backend="numpy").image()
+    np.testing.assert_array_equal(view.image(), expected)
+    assert view.canvas.frame.backend == "numpy"
