@@ -291,16 +291,22 @@ class Viewer:
 
     def rest_size(self) -> tuple[int, int]:
         """The size the view renders at when still: `resolution_scale` of the window."""
-        scale = min(max(self.resolution_scale, MIN_SCALE), MAX_SCALE)
-        return tuple(max(1, round(side * scale)) for side in self.size)
+        return self._scaled_size(1.0)
 
     def render_size(self) -> tuple[int, int]:
         """The size the view renders at now: `rest_size`, times `moving_scale` while the
         camera moves."""
-        if not (self.refine and self.moving):
-            return self.rest_size()
-        scale = min(max(self.resolution_scale, MIN_SCALE), MAX_SCALE) * self.moving_scale
+        return self._scaled_size(self.moving_scale if self.refine and self.moving else 1.0)
+
+    def _scaled_size(self, factor: float) -> tuple[int, int]:
+        scale = min(max(self.resolution_scale, MIN_SCALE), MAX_SCALE) * factor
         return tuple(max(1, round(side * scale)) for side in self.size)
+
+    def texel_at(self, x: float, y: float, width: int, height: int) -> tuple[int, int]:
+        """The pixel (column, row) of a ``width`` x ``height`` picture of the view (drawn at
+        a reduced size, say) under view pixel (x, y)."""
+        return (min(max(int(x * width / self.size[0]), 0), width - 1),
+                min(max(int(y * height / self.size[1]), 0), height - 1))
 
     # --- physics -----------------------------------------------------------------------------
 
@@ -545,6 +551,11 @@ class Viewer:
         thread = threading.Thread(target=work, name="marchlab-check", daemon=True)
         thread.start()
         return thread
+
+
+def verdict(failures) -> str:
+    """A check's verdict in a few words: every gate passes, or which fail."""
+    return "every gate passes" if not failures else "FAILS: " + "; ".join(failures)
 
 
 def adapt_moving_scale(scale: float, frame_seconds: float, fixed_seconds: float = 0.0,

@@ -26,7 +26,7 @@ from scene_model.shapes import Node, children, node_kinds
 from scene_model import editing
 
 from .recording import Recorder, Turntable
-from .view import MARKER_RADIUS, MOVING_SCALES, OVERLAYS, TARGET_FPS, Viewer
+from .view import MARKER_RADIUS, MOVING_SCALES, OVERLAYS, TARGET_FPS, Viewer, verdict
 
 DIFFERENCE_GAIN = 32
 
@@ -157,9 +157,7 @@ class ViewDrawer:
         """The object id under view pixel (x, y) (-1: a miss), from the drawn picture."""
         if self.target is None:
             return -1
-        width, height = self.drawn[1]
-        i = min(max(int(x * width / viewer.size[0]), 0), width - 1)
-        j = min(max(int(y * height / viewer.size[1]), 0), height - 1)
+        i, j = viewer.texel_at(x, y, *self.drawn[1])
         with self.ctx:
             data = self.target.read(viewport=(i, j, 1, 1), components=4, attachment=2,
                                     dtype="i4")
@@ -742,9 +740,9 @@ class Window:
             imgui.progress_bar(done / max(total, 1), (-1, 0), viewer.check_stage)
             return
         check = viewer.check
-        imgui.text_wrapped(f"gpu: {_verdict(check.failures)} ({check.seconds:.1f} s)")
+        imgui.text_wrapped(f"gpu: {verdict(check.failures)} ({check.seconds:.1f} s)")
         if check.opencl_failures is not None:
-            imgui.text_wrapped(f"OpenCL: {_verdict(check.opencl_failures)}")
+            imgui.text_wrapped(f"OpenCL: {verdict(check.opencl_failures)}")
         size = (check.reference.shape[1] / 2, check.reference.shape[0] / 2)
         names = ("reference", "gpu", "difference") + (("opencl",) if check.opencl is not None
                                                        else ())
@@ -817,10 +815,6 @@ class _Gl:
 
 
 _UNCHANGED = object()
-
-
-def _verdict(failures) -> str:
-    return "every gate passes" if not failures else "FAILS: " + "; ".join(failures)
 
 
 MENU_BAR = 20        # pixels at the top of the window that the menu bar takes

@@ -33,7 +33,7 @@ from scene_model.errors import MarchlabError
 from scene_model.fields import Range, color_range, field_types
 from scene_model import editing
 
-from .view import OVERLAYS, SETTLE_SECONDS, Viewer
+from .view import OVERLAYS, SETTLE_SECONDS, Viewer, verdict
 
 WHEEL_NOTCH = 100.0        # a browser's deltaY for one notch of a mouse wheel
 KEY_SECONDS = 0.1          # how long one press of a flying key flies
@@ -124,21 +124,22 @@ class _Canvas:
         if self.frame is None:
             return -1
         height, width = self.frame.object_id.shape
-        i = min(max(int(x * width / self.viewer.size[0]), 0), width - 1)
-        j = min(max(int(y * height / self.viewer.size[1]), 0), height - 1)
+        i, j = self.viewer.texel_at(x, y, width, height)
         return int(self.frame.object_id[j, i])
 
     def _refine_later(self) -> None:
         """Draw again once the motion has settled, at full resolution."""
-        import asyncio
-        try:
-            loop = asyncio.get_running_loop()
-        except RuntimeError:
-            try:
-                loop = asyncio.get_event_loop()
-            except RuntimeError:
-                return
-        loop.call_later(SETTLE_SECONDS * 1.05, self.request_draw)
+        call_later(SETTLE_SECONDS * 1.05, self.request_draw)
+
+
+def call_later(seconds: float, callback):
+    """``callback()`` after ``seconds`` on the kernel's event loop; None (and nothing
+    scheduled) where there is no loop, as outside a kernel."""
+    import asyncio
+    try:
+        return asyncio.get_event_loop().call_later(seconds, callback)
+    except RuntimeError:
+        return None
 
 
 MARKER_COLOR = np.array([255, 230, 50], np.uint8)
@@ -150,15 +151,23 @@ def mark_lights(image: np.ndarray, viewer: Viewer) -> np.ndarray:
     height, width = image.shape[:2]
     scale = width / viewer.size[0]
     radius = max(2.0, 5.0 * scale)
-    rows, cols = np.mgrid[0:height, 0:width] + 0.5
+    ring = radius + 1.5
     out = image
     for _, x, y in viewer.light_markers():
-        distance = np.hypot(cols - x * scale, rows - y * scale)
-        if distance.min() > radius + 1.5:
+        cx, cy = x * scale, y * scale
+        # Only the pixels near the mark: this runs for every frame the notebook draws.
+        top, bottom = max(int(cy - ring), 0), min(int(cy + ring) + 1, height)
+        left, right = max(int(cx - ring), 0), min(int(cx + ring) + 1, width)
+        if top >= bottom or left >= right:
+            continue
+        rows, cols = np.mgrid[top:bottom, left:right] + 0.5
+        distance = np.hypot(cols - cx, rows - cy)
+        if distance.min() > ring:
             continue
         out = out.copy() if out is image else out
-        out[distance <= radius + 1.5] = 0
-        out[distance <= radius] = MARKER_COLOR
+        patch = out[top:bottom, left:right]
+        patch[distance <= ring] = 0
+        patch[distance <= radius] = MARKER_COLOR
     return out
 
 
@@ -355,10 +364,9 @@ class View:
                        path_labels=True)
         viewer.check_against_reference(shown, background=False)
         result = viewer.check
-        verdict = "every gate passes" if not result.failures else "; ".join(result.failures)
-        self.verdict.value = f"{self.canvas.backend}: {verdict}" + (
+        self.verdict.value = f"{self.canvas.backend}: {verdict(result.failures)}" + (
             "" if result.opencl_failures is None else
-            f"; OpenCL: {'every gate passes' if not result.opencl_failures else 'FAILS'}")
+            f"; OpenCL: {verdict(result.opencl_failures)}")
         import ipywidgets as widgets
         pictures = [("NumPy reference", result.reference), (self.canvas.backend, result.gpu),
                     ("difference x32", result.difference)]
@@ -479,12 +487,7 @@ class PhysicsView(View):
         self.canvas.request_draw()
 
     def _schedule(self) -> None:
-        import asyncio
-        try:
-            loop = asyncio.get_event_loop()
-        except RuntimeError:
-            return
-        self._handle = loop.call_later(TICK_SECONDS, self._beat)
+        self._handle = call_later(TICK_SECONDS, self._beat)
 
     def _beat(self) -> None:
         if self.viewer.playback.playing:

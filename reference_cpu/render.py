@@ -53,8 +53,10 @@ def render(scene: Scene, width: int, height: int, precision: str = "float64",
     starts = np.zeros(n, dtype)            # where each primary ray starts
     if prepass_tile is not None:
         r = scene.render
-        cone_start, _ = start_distances(scene.camera, width, height, tracer.sdf64,
-                                        prepass_tile, r.max_steps, r.epsilon, r.max_distance)
+        sdf64 = tracer.sdf if dtype == np.float64 else build_scene_sdf(scene.objects,
+                                                                       np.float64)
+        cone_start, _ = start_distances(scene.camera, width, height, sdf64, prepass_tile,
+                                        r.max_steps, r.epsilon, r.max_distance)
         starts = cone_start.reshape(-1).astype(dtype)
     out = {
         "color": np.zeros((n, 3), np.float32), "depth": np.full(n, np.inf, dtype),
@@ -97,8 +99,6 @@ class Tracer:
         self.scene, self.settings, self.dtype = scene, scene.render, dtype
         self.path_labels = path_labels
         self.sdf = build_scene_sdf(scene.objects, dtype)
-        self.sdf64 = self.sdf if dtype == np.float64 else build_scene_sdf(scene.objects,
-                                                                          np.float64)
         self.sdf_ids = build_scene_sdf(scene.objects, dtype, with_ids=True)
         # How far each step of a march goes (relaxation, culling): the same for primary,
         # mirror and hard-shadow rays. Soft shadows keep plain steps: their penumbra is
