@@ -141,17 +141,22 @@ def _run_the_cell(page) -> None:
     raise AssertionError("JupyterLab ran the cell six times and showed no view")
 
 
-def _camera_file(folder: Path, until, timeout: float = 30.0) -> dict:
-    """The kernel's last drawn camera, once ``until(state)`` holds."""
+def _camera_file(folder: Path, until, timeout: float = 30.0, settle: float = 1.0) -> dict:
+    """The kernel's last drawn camera, once ``until(state)`` holds and the kernel has drawn
+    nothing different for ``settle`` seconds: the browser sends a drag's moves as they come,
+    so a frame drawn mid-drag (9 of 10 moves) would satisfy ``until`` too early."""
     deadline = time.monotonic() + timeout
+    seen, since = None, time.monotonic()
     while time.monotonic() < deadline:
         try:
             state = json.loads((folder / "camera.json").read_text())
-            if until(state):
-                return state
         except (OSError, ValueError):
-            pass
-        time.sleep(0.2)
+            state = None
+        if state != seen:
+            seen, since = state, time.monotonic()
+        elif state is not None and until(state) and time.monotonic() - since >= settle:
+            return state
+        time.sleep(0.1)
     raise AssertionError(f"the kernel drew no frame that satisfies the test in {timeout} s")
 
 
