@@ -102,6 +102,10 @@ class _Canvas:
             else:
                 viewer.drag(button, dx, dy)
         elif kind == "pointer_up" and self._pointer is not None:
+            if (event["x"], event["y"]) != self._pointer[1:]:
+                # jupyter-rfb throttles moves: the last stretch of a quick drag may arrive
+                # only as the release's position.
+                self.handle_event(dict(event, type="pointer_move"))
             button, held = self._pointer[0], viewer.holding
             viewer.let_go()
             if button == "left" and held is None and not self._moved:

@@ -134,7 +134,7 @@ def _run_the_cell(page) -> None:
         page.locator(".jp-Notebook .jp-Cell .jp-InputArea-editor").first.click()
         page.keyboard.press("Control+Enter")
         try:
-            page.wait_for_selector(".renderview-wrapper img", timeout=15_000)
+            page.wait_for_selector(".renderview-wrapper img", timeout=30_000)
             return
         except Exception:                    # Playwright's TimeoutError: try again
             continue
