@@ -29,17 +29,19 @@ ray that grazes a silhouette (passing within epsilon of a surface without meetin
 stop at the graze in one march and fly on in the other, as it may between float32 and
 float64; the equivalence gates excuse exactly those pixels (docs/equivalence.md).
 
-`tile_cones` gives each tile's axis and half-angle, `cone_march` marches them, and `start_distances`
-spreads the result over the tile's pixels; `reference_cpu.march.march` takes it as ``start``.
+`tile_cones` gives each tile's axis and half-angle, `cone_march` marches them, and
+`start_distances` spreads the result over the tile's pixels; `reference_cpu.march.march` takes
+it as ``start``. All of it runs in the render's precision, with the operations of
+glsl/cone.glsl in the same order, so the OpenCL program finds the same starts to the bit and
+the gpu backend's float32 ones to within rounding. The scene setting is
+``render.prepass = "cone"`` with ``render.prepass_tile`` pixels a side.
 """
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
-from scene_model.camera import camera_basis
+from scene_model.camera import image_rays
 from scene_model.scene import Camera
 
 # A cone stops once a step would carry it less than this fraction of its own width
@@ -48,80 +50,95 @@ from scene_model.scene import Camera
 # its steps there: 163 evaluations per 8 x 8 tile of the classroom instead of about 20, for
 # a start a fraction of a tile's width further on. Stopping sooner is always safe.
 MIN_PROGRESS = 0.1
+# Added to each cone's tan(theta): the corner directions are unit vectors rounded to the
+# render's precision (about 1e-7 in float32), so the measured angle may come out that much
+# too small; 1e-6 keeps every ray of the tile inside its cone whatever the rounding.
+CONE_SLACK = 1e-6
 
 
-def tile_cones(camera: Camera, width: int, height: int, tile: int):
+def tile_cones(camera: Camera, width: int, height: int, tile: int, dtype=np.float64):
     """The cone of each tile of ``tile`` x ``tile`` pixels (tiles at the right and bottom
     edges may be smaller): the axis through the tile's centre and the half-angle that holds
-    the rays through all four corners of the tile, so every pixel's ray.
+    the rays through all four corners of the tile, so every pixel's ray. ``tile_cone`` in
+    glsl/cone.glsl, for every tile at once.
+
+    The angle between the axis a and a corner's ray r is measured as
+    tan = |a x r| / (a . r): for the small angles of a tile, 1 - cos^2 would lose most of
+    its digits to cancellation (0.08 % of tan(theta) in float32 at 8 pixels a tile).
 
     Returns
     -------
-    axes : (TH, TW, 3) float64 ndarray
+    axes : (TH, TW, 3) ndarray of ``dtype``
         Unit axis of each tile's cone, TH = ceil(H / tile) rows of TW = ceil(W / tile).
-    tan_half_angles : (TH, TW) float64 ndarray
-        tan(theta) of each cone, widened by 1e-9 (relative) against rounding.
+    tan_half_angles : (TH, TW) ndarray of ``dtype``
+        tan(theta) of each cone, plus `CONE_SLACK`.
     """
-    forward, right, up = camera_basis(camera)
-    half_height = math.tan(math.radians(camera.fov) / 2)
-    half_width = half_height * width / height
+    dtype = np.dtype(dtype)
+    tiles_wide, tiles_high = -(-width // tile), -(-height // tile)
+    x0 = np.arange(tiles_wide, dtype=dtype)[None, :] * dtype.type(tile)
+    y0 = np.arange(tiles_high, dtype=dtype)[:, None] * dtype.type(tile)
+    x1 = np.minimum(x0 + dtype.type(tile), dtype.type(width))
+    y1 = np.minimum(y0 + dtype.type(tile), dtype.type(height))
+    x0, y0, x1, y1 = np.broadcast_arrays(x0, y0, x1, y1)
+    half = dtype.type(0.5)
+    axes = image_rays(camera, half * (x0 + x1), half * (y0 + y1), width, height, dtype)
+    widest = np.zeros(x0.shape, dtype)
+    for cx, cy in ((x0, y0), (x1, y0), (x0, y1), (x1, y1)):
+        widest = np.maximum(widest, cone_tan(axes, image_rays(camera, cx, cy, width, height,
+                                                              dtype)))
+    return axes, widest + dtype.type(CONE_SLACK)
 
-    def image_plane(px, py):
-        """The point of the image plane (distance 1 along forward) at pixel coordinates
-        (px, py), counted from the top-left corner (as `camera_rays` aims)."""
-        sx = (2 * px / width - 1) * half_width
-        sy = (1 - 2 * py / height) * half_height
-        return forward + sx[..., None] * right + sy[..., None] * up
 
-    x0 = np.arange(0, width, tile, dtype=np.float64)
-    y0 = np.arange(0, height, tile, dtype=np.float64)
-    x1, y1 = np.minimum(x0 + tile, width), np.minimum(y0 + tile, height)
-    X0, Y0 = np.meshgrid(x0, y0)
-    X1, Y1 = np.meshgrid(x1, y1)
-    axes = image_plane((X0 + X1) / 2, (Y0 + Y1) / 2)
-    axes /= np.linalg.norm(axes, axis=-1, keepdims=True)
-    cos_half = np.ones(X0.shape)
-    for cx, cy in ((X0, Y0), (X1, Y0), (X0, Y1), (X1, Y1)):
-        corner = image_plane(cx, cy)
-        corner /= np.linalg.norm(corner, axis=-1, keepdims=True)
-        cos_half = np.minimum(cos_half, np.sum(corner * axes, axis=-1))
-    cos_half = np.clip(cos_half, -1.0, 1.0)
-    tan_half = np.sqrt(1 - cos_half ** 2) / cos_half
-    return axes, tan_half * (1 + 1e-9)
+def cone_tan(axis, ray):
+    """tan of the angle between unit vectors ``axis`` and ``ray`` (..., 3): |a x r| / (a . r),
+    with the products in the order of GLSL's ``cross`` and ``dot``."""
+    a, r = axis, ray
+    c = np.stack([a[..., 1] * r[..., 2] - a[..., 2] * r[..., 1],
+                  a[..., 2] * r[..., 0] - a[..., 0] * r[..., 2],
+                  a[..., 0] * r[..., 1] - a[..., 1] * r[..., 0]], axis=-1)
+    return np.sqrt(_dot(c, c)) / _dot(a, r)
+
+
+def _dot(a, b):
+    return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1] + a[..., 2] * b[..., 2]
 
 
 def cone_march(origin, axes, tan_half_angles, sdf, max_steps: int, margin: float,
-               max_distance: float, start=None):
+               max_distance: float):
     """March cones from ``origin`` along ``axes`` (N, 3) with half-angles whose tangents are
     ``tan_half_angles`` (N,): how far along its axis each cone stays at least ``margin``
-    from every surface, and the SDF evaluations that took.
+    from every surface, and the SDF evaluations that took. ``cone_march`` of glsl/cone.glsl.
 
-    Each step evaluates d = |sdf(c(t))| and advances by (d - margin - t tan) / (1 + tan);
-    a cone stops when that is less than `MIN_PROGRESS` of its width (margin + t tan), when
-    t passes ``max_distance``, or after ``max_steps`` evaluations. Float64 throughout.
-    ``start`` (N,), optional: where each cone starts (a distance a wider cone holding it has
-    shown safe), else 0.
+    Each step evaluates d = |sdf(c(t))|, the cone's width w = margin + t tan and
+    delta = (d - w) / (1 + tan); a cone stops when delta is at most `MIN_PROGRESS` w,
+    else advances by delta and stops once t passes ``max_distance``; at most ``max_steps``
+    evaluations. The precision is that of ``axes``.
 
     Returns
     -------
-    t : (N,) float64 ndarray
+    t : (N,) ndarray
         The safe axial distance of each cone (0 where it cannot leave the eye).
     steps : (N,) int32 ndarray
         SDF evaluations spent on each cone.
     """
+    dtype = axes.dtype
     n = len(axes)
-    t = np.zeros(n) if start is None else np.array(start, np.float64)
+    t = np.zeros(n, dtype)
     steps = np.zeros(n, np.int32)
     live = np.ones(n, bool)
-    origin = np.asarray(origin, np.float64)
+    origin = np.asarray(origin, dtype)
+    margin, max_distance = dtype.type(margin), dtype.type(max_distance)
+    one, progress = dtype.type(1), dtype.type(MIN_PROGRESS)
     for _ in range(max_steps):
         index = np.flatnonzero(live)
         if not len(index):
             break
         d = np.abs(sdf(origin + t[index, None] * axes[index])[0])
         steps[index] += 1
-        delta = (d - margin - t[index] * tan_half_angles[index]) / (1 + tan_half_angles[index])
-        moving = delta > MIN_PROGRESS * (margin + t[index] * tan_half_angles[index])
+        tan = tan_half_angles[index]
+        width = margin + t[index] * tan
+        delta = (d - width) / (one + tan)
+        moving = delta > progress * width
         t[index[moving]] += delta[moving]
         live[index[~moving]] = False
         live[index[moving]] &= t[index[moving]] <= max_distance
@@ -129,18 +146,19 @@ def cone_march(origin, axes, tan_half_angles, sdf, max_steps: int, margin: float
 
 
 def start_distances(camera: Camera, width: int, height: int, sdf, tile: int, max_steps: int,
-                    epsilon: float, max_distance: float):
+                    epsilon: float, max_distance: float, dtype=np.float64):
     """Where each pixel's primary ray may start: its tile's `cone_march` distance, with the
-    hit threshold ``epsilon`` as the margin (see the module's proof).
+    hit threshold ``epsilon`` as the margin (see the module's proof), in ``dtype`` (``sdf``
+    evaluates in it too).
 
     Returns
     -------
-    start : (H, W) float64 ndarray
+    start : (H, W) ndarray of ``dtype``
         Safe start distance of each pixel's ray.
     tile_steps : (TH, TW) int32 ndarray
         SDF evaluations of each tile's cone: the pre-pass's cost, shared by its pixels.
     """
-    axes, tan_half = tile_cones(camera, width, height, tile)
+    axes, tan_half = tile_cones(camera, width, height, tile, dtype)
     shape = tan_half.shape
     t, steps = cone_march(camera.position, axes.reshape(-1, 3), tan_half.reshape(-1), sdf,
                           max_steps, epsilon, max_distance)

@@ -178,6 +178,10 @@ def march(origins, directions, sdf, max_steps, epsilon, max_distance, observe=No
                 extra = {name: value[keep] for name, value in extra.items()}
                 if relax is not None:
                     relax.keep(keep)
+        if not live.all():
+            # Finished rays that ride along stay where they stopped: stepping on, a ray
+            # that escaped would double its t each step and overflow float32.
+            np.copyto(t_next, t, where=~live)
         t = t_next
     return t_out, steps, hit
 

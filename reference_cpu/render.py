@@ -36,28 +36,20 @@ AOV_MODES = ("normals", "depth", "steps")
 
 def render(scene: Scene, width: int, height: int, precision: str = "float64",
            progress: Callable[[int, int], None] | None = None,
-           path_labels: bool = False, prepass_tile: int | None = None) -> Frame:
+           path_labels: bool = False) -> Frame:
     """Render ``scene`` at ``width`` x ``height`` pixels in float32 or float64.
 
     ``progress(done, total)`` is called after each block of rays, if given; with
     ``path_labels`` the frame holds each pixel's path label (`Frame.path`), else None. With
-    ``prepass_tile`` T, each primary ray starts where its T x T tile's cone got to
-    (`reference_cpu.cone_prepass`; not yet a scene setting: the gpu and OpenCL backends do
-    not run it yet).
+    ``render.prepass = "cone"``, each primary ray starts where its tile's cone got to
+    (`reference_cpu.cone_prepass`).
     """
     dtype = np.dtype(precision)
     tracer = Tracer(scene, dtype, path_labels)
     origin, directions = camera_rays(scene.camera, width, height, dtype)
     directions = directions.reshape(-1, 3)
     n = len(directions)
-    starts = np.zeros(n, dtype)            # where each primary ray starts
-    if prepass_tile is not None:
-        r = scene.render
-        sdf64 = tracer.sdf if dtype == np.float64 else build_scene_sdf(scene.objects,
-                                                                       np.float64)
-        cone_start, _ = start_distances(scene.camera, width, height, sdf64, prepass_tile,
-                                        r.max_steps, r.epsilon, r.max_distance)
-        starts = cone_start.reshape(-1).astype(dtype)
+    starts = prepass_starts(scene, width, height, tracer.sdf, dtype).reshape(-1)
     out = {
         "color": np.zeros((n, 3), np.float32), "depth": np.full(n, np.inf, dtype),
         "normal": np.zeros((n, 3), dtype), "steps": np.zeros(n, np.int32),
@@ -76,6 +68,18 @@ def render(scene: Scene, width: int, height: int, precision: str = "float64",
     arrays = {k: v.reshape(shape.get(k, (height, width))) for k, v in out.items()}
     return Frame(**arrays, gamma=scene.render.gamma, max_steps=scene.render.max_steps,
                  backend="numpy", precision=dtype.name)
+
+
+def prepass_starts(scene: Scene, width: int, height: int, sdf, dtype) -> np.ndarray:
+    """(H, W) ``dtype``: where each primary ray starts, 0 without a pre-pass; with
+    ``render.prepass = "cone"``, its tile's cone distance (`cone_prepass.start_distances`,
+    the margin the hit threshold epsilon)."""
+    r = scene.render
+    if r.prepass == "none":
+        return np.zeros((height, width), dtype)
+    start, _ = start_distances(scene.camera, width, height, sdf, r.prepass_tile, r.max_steps,
+                               r.epsilon, r.max_distance, dtype)
+    return start
 
 
 def path_step(path, ids, features=0):

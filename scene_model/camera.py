@@ -83,15 +83,33 @@ def camera_rays(camera: Camera, width: int, height: int, dtype=np.float64):
         Unit direction of the ray through pixel (x, y) at ``directions[y, x]``.
     """
     dtype = np.dtype(dtype)
+    x = np.arange(width, dtype=dtype) + dtype.type(0.5)
+    y = np.arange(height, dtype=dtype) + dtype.type(0.5)
+    directions = image_rays(camera, x[None, :], y[:, None], width, height, dtype)
+    return np.asarray(camera.position, dtype=dtype), directions
+
+
+def image_rays(camera: Camera, x, y, width: int, height: int, dtype=np.float64):
+    """The unit directions of the rays through the image points (``x``, ``y``), in pixels
+    from the top-left corner (pixel (i, j)'s centre is (i + 0.5, j + 0.5)), computed in
+    ``dtype`` with the operations, in the order, of ``camera_ray`` in glsl/camera.glsl.
+
+    Parameters
+    ----------
+    x, y : array_like
+        Image coordinates; any shapes that broadcast together to S.
+
+    Returns
+    -------
+    directions : (S..., 3) ndarray of ``dtype``
+    """
+    dtype = np.dtype(dtype)
     forward, right, up = (v.astype(dtype) for v in camera_basis(camera))
     half_height = math.tan(math.radians(camera.fov) / 2)
-    x = np.arange(width, dtype=dtype)
-    y = np.arange(height, dtype=dtype)
-    sx = (2 * (x + dtype.type(0.5)) / dtype.type(width) - 1) * dtype.type(half_height * width / height)
-    sy = (1 - 2 * (y + dtype.type(0.5)) / dtype.type(height)) * dtype.type(half_height)
-    directions = forward + sx[None, :, None] * right + sy[:, None, None] * up
-    return np.asarray(camera.position, dtype=dtype), normalize(directions)
-
+    x, y = np.asarray(x, dtype), np.asarray(y, dtype)
+    sx = (2 * x / dtype.type(width) - 1) * dtype.type(half_height * width / height)
+    sy = (1 - 2 * y / dtype.type(height)) * dtype.type(half_height)
+    return normalize(forward + sx[..., None] * right + sy[..., None] * up)
 
 
 def pixel_ray(camera: Camera, x: float, y: float, width: int, height: int):

@@ -184,6 +184,12 @@ class RenderSettings(Record):
     omega: float = param(1.2, "Relaxation factor of relaxation = \"fixed\".", Range(1.0, 2.0))
     bounding_spheres: bool = param(False, "Leave out of each ray's march the objects whose "
                                           "bounding sphere it misses (Whitted 1980).")
+    prepass: Literal["none", "cone"] = param(
+        "none", "Cone-marching pre-pass: none, or cone (one cone per prepass_tile x "
+                "prepass_tile pixels is marched first, and each pixel's ray starts where its "
+                "tile's cone got to; only empty space is skipped, docs/sphere-tracing.md).")
+    prepass_tile: int = param(8, "Cone pre-pass: the tile's width and height in pixels.",
+                              Range(2, 64))
     normal_method: Literal["central", "tetrahedron"] = param(
         "central", "Gradient estimate: central differences (6 evaluations) or Quilez's "
                    "tetrahedron (4).")
