@@ -44,6 +44,9 @@ class Dialect:
     entry: str                                    # the entry point file in glsl/
     finish: Callable[[str], str] = lambda source: source   # last rewrite of the whole text
     packets: bool = False                         # one packet of rays per work-item?
+    # The entry point of the cone pre-pass's own program, where it is one ("" where the
+    # entry point file holds the pre-pass's kernel too).
+    prepass_entry: str = ""
     # The vertex shader that goes with the program (GLSL), given the same three numbers as
     # declare_parameters; "" for the plain full-screen triangle or no vertex stage.
     vertex_shader: Callable[[int, int, int], str] = lambda rows, fixed, flat_rows: ""
@@ -159,6 +162,7 @@ GLSL = Dialect(
     vertex_shader=glsl_vertex_shader,
     real_dtype=np.dtype(np.float32),
     entry="main.frag",
+    prepass_entry="prepass.frag",
 )
 
 

@@ -28,6 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from reference_cpu.cone_prepass import CONE_SLACK, MIN_PROGRESS
 from reference_cpu.culling import culled_bounds
 from reference_cpu.normals import STENCILS
 from reference_cpu.relaxation import SLOPE_WEIGHT
@@ -69,12 +70,27 @@ class Program:
         parameter rows as flat varyings); "" for the plain full-screen triangle.
     path_labels : bool
         Whether the program writes path labels (`scene_model.frame.Frame.path`).
+    prepass_tile : int
+        With ``render.prepass = "cone"``, the pre-pass's tile size T: the program reads each
+        pixel's start from a (ceil(H / T), ceil(W / T)) array of tile starts (GLSL: the
+        texture ``cone_starts``; OpenCL: the buffer its ``cone_prepass`` kernel fills); 0
+        without a pre-pass.
+    prepass_source : str
+        GLSL: the fragment shader that draws the tile starts into ``cone_starts``, one
+        fragment per tile (it shares ``vertex_source``); "" otherwise.
     """
     source: str
     parameters: np.ndarray
     features: tuple[str, ...]
     vertex_source: str = ""
     path_labels: bool = False
+    prepass_tile: int = 0
+    prepass_source: str = ""
+
+    def tiles(self, width: int, height: int) -> tuple[int, int]:
+        """(columns, rows) of pre-pass tiles of a width x height image."""
+        tile = self.prepass_tile
+        return -(-width // tile), -(-height // tile)
 
 
 def generate(scene: Scene, width: int, height: int, dialect: str = "glsl",
@@ -98,7 +114,7 @@ def generate(scene: Scene, width: int, height: int, dialect: str = "glsl",
         scalar = scalar_program(scene, width, height, precision, path_labels,
                                 pair_shadow_rays=False)
         return Program(packet_source(scalar, language), scalar.parameters, scalar.features,
-                       path_labels=path_labels)
+                       path_labels=path_labels, prepass_tile=scalar.prepass_tile)
     return _Generator(scene, language, flat_rows, path_labels).program(width, height)
 
 
@@ -124,6 +140,7 @@ class ScalarProgram:
     parameters: np.ndarray
     features: tuple[str, ...]
     path_labels: bool = False
+    prepass_tile: int = 0
 
 
 def scalar_program(scene: Scene, width: int, height: int, precision: str = "float32",
@@ -139,7 +156,7 @@ def scalar_program(scene: Scene, width: int, height: int, precision: str = "floa
     functions = "\n".join(_banner(title) + text for title, text in parts if text)
     return ScalarProgram(generator.block.defines(), functions,
                          generator.block.values(np.float64), tuple(sorted(generator.features)),
-                         path_labels)
+                         path_labels, generator.prepass_tile)
 
 
 class _Generator:
@@ -155,6 +172,7 @@ class _Generator:
         self.reflections = (self.s.reflection_depth > 0 and self.s.shading in LIT_MODES
                             and any(m.kr > 0 for m in self.materials))
         self.fog = self.s.fog.density > 0 and self.s.shading in LIT_MODES
+        self.prepass_tile = self.s.prepass_tile if self.s.prepass == "cone" else 0
         # Hard shadow rays toward two lights are marched together (hard_shadow_pair) with
         # plain sphere tracing (relaxed shadow rays keep the relaxed march of their own):
         # lights 0 .. paired_lights - 1, two by two. The last of an odd number, or every
@@ -167,18 +185,34 @@ class _Generator:
 
     def program(self, width: int, height: int) -> Program:
         parts, fixed = self.sections(width, height)
-        entry = self.d.entry
-        parts.append((f"the entry point (glsl/{entry})",
-                      fill_template(entry, path_labels=self.path_labels)))
+        prepass_parts = []
+        if self.prepass_tile and self.d.prepass_entry:
+            # The cone march is a program of its own here (a first draw into a small
+            # texture): the geometry and camera, then the pre-pass, then its entry point.
+            cone = next(i for i, (title, _) in enumerate(parts) if title.startswith("the cone"))
+            prepass_parts = parts[:cone + 1] + [self.entry(self.d.prepass_entry)]
+            del parts[cone]
+        parts.append(self.entry(self.d.entry))
         rows, fixed = max(1, len(self.block.rows)), max(1, fixed)
         head = [self.d.prelude, _banner("parameters: one vec4 row each, set per frame")
                 + self.d.declare_parameters(rows, fixed, self.flat_rows)]
         head.append(self.block.defines())
         head.append(self.d.structs(self.path_labels))
-        body = [_banner(title) + text for title, text in parts if text]
-        source = self.d.finish("\n".join(head + body))
-        return Program(source, self.block.values(np.float64), tuple(sorted(self.features)),
-                       self.d.vertex_shader(rows, fixed, self.flat_rows), self.path_labels)
+
+        def assemble(sections):
+            body = [_banner(title) + text for title, text in sections if text]
+            return self.d.finish("\n".join(head + body))
+
+        return Program(assemble(parts), self.block.values(np.float64),
+                       tuple(sorted(self.features)),
+                       self.d.vertex_shader(rows, fixed, self.flat_rows), self.path_labels,
+                       self.prepass_tile, assemble(prepass_parts) if prepass_parts else "")
+
+    def entry(self, name: str) -> tuple[str, str]:
+        """The section of the entry point ``glsl/<name>``."""
+        return (f"the entry point (glsl/{name})",
+                fill_template(name, path_labels=self.path_labels,
+                              prepass=bool(self.prepass_tile)))
 
     def sections(self, width: int, height: int) -> tuple[list[tuple[str, str]], int]:
         """The program's functions as (section title, text) pairs in reading order, all but
@@ -199,6 +233,12 @@ class _Generator:
             (f"the camera ({self.file('camera')})",
              self.d.library("camera").select(["camera_ray"])),
         ]
+        if self.prepass_tile:
+            self.features.add("prepass:cone")
+            defines = (f"#define MIN_PROGRESS {self.d.literal(MIN_PROGRESS)}\n"
+                       f"#define CONE_SLACK {self.d.literal(CONE_SLACK)}\n\n")
+            parts.append((f"the cone pre-pass ({self.file('cone')})",
+                          defines + self.d.library("cone").select(["tile_start"])))
         parts += self.march_parts()
         parts.append(("surface normals (glsl/pipeline/normals.glsl)", self.normal_code()))
         parts += self.shading_parts()
@@ -238,7 +278,11 @@ class _Generator:
         # Loop bounds are integers; the block holds floats, exact for any sensible count.
         b.names = [(n, self.d.to_int(e) if n in ("MAX_STEPS", "REFLECTION_DEPTH") else e)
                    for n, e in b.names]
-        b.named({"AMBIENT": ("xyz", s.ambient)})
+        # The pre-pass's tile size shares the ambient row: a row more can push a scene's
+        # fixed rows past the flat varyings (gpu_shader/dialects.py), which made csg's
+        # frame on llvmpipe twice as slow.
+        b.named({"AMBIENT": ("xyz", s.ambient)}
+                | ({"PREPASS_TILE": ("w", self.prepass_tile)} if self.prepass_tile else {}))
         if self.fog:
             self.features.add("fog")
             b.named({"FOG_COLOR": ("xyz", s.fog.color), "FOG_DENSITY": ("w", s.fog.density)})

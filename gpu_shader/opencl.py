@@ -184,15 +184,27 @@ def render(scene: Scene, width: int, height: int, precision: str = "float32",
     program = generate(scene, width, height, precision=precision, path_labels=path_labels,
                        dialect="opencl-packets" if packets else "opencl")
     dtype = np.dtype(np.float32 if precision == "float32" else np.float64)
-    kernel = _kernel(cl, dev, program.source, precision)
+    kernels = _kernels(cl, dev, program.source, precision)
+    kernel = kernels["render"]
 
     flags = cl.mem_flags
     parameters = cl.Buffer(dev.context, flags.READ_ONLY | flags.COPY_HOST_PTR,
                            hostbuf=np.ascontiguousarray(program.parameters, dtype=dtype))
     planes = np.empty((3, height, width, 4), dtype)
     outputs = [cl.Buffer(dev.context, flags.WRITE_ONLY, planes[i].nbytes) for i in range(3)]
-    kernel.set_args(parameters, *outputs)
     local = PACKET_WORK_GROUP if packets else WORK_GROUP
+    if program.prepass_tile:
+        # The cone pre-pass first: one work-item per tile (per LANES tiles of a row in the
+        # packet program), into the buffer of tile starts that the frame's kernel reads.
+        columns, rows = program.tiles(width, height)
+        starts = cl.Buffer(dev.context, flags.READ_WRITE, columns * rows * dtype.itemsize)
+        prepass = kernels["cone_prepass"]
+        prepass.set_args(parameters, starts)
+        items = -(-columns // PACKET_LANES) if packets else columns
+        cl.enqueue_nd_range_kernel(dev.queue, prepass, (_round_up(items, local[0]),
+                                                        _round_up(rows, local[1])), local)
+        outputs.append(starts)
+    kernel.set_args(parameters, *outputs)
     columns = -(-width // PACKET_LANES) if packets else width     # work-items per row
     for start, stop in row_bands(height, progress):
         rows = stop - start
@@ -211,8 +223,9 @@ def render(scene: Scene, width: int, height: int, precision: str = "float32",
     return frame
 
 
-def _kernel(cl, dev: Device, source: str, precision: str):
-    """The ``render`` kernel of ``source``, built once per text and precision."""
+def _kernels(cl, dev: Device, source: str, precision: str) -> dict:
+    """The kernels of ``source`` by name (``render``, and ``cone_prepass`` with the pre-pass),
+    built once per text and precision."""
     key = (source, precision)
     if key in dev.programs:
         dev.programs.move_to_end(key)
@@ -229,11 +242,11 @@ def _kernel(cl, dev: Device, source: str, precision: str):
         raise MarchlabError(f"the generated OpenCL kernel failed to build on {dev.label}: "
                             f"{_first_line(err)} (`marchlab shader SCENE --dialect opencl "
                             f"--numbered` prints it)") from None
-    kernel = built.render
-    dev.programs[key] = kernel
+    kernels = {k.function_name: k for k in built.all_kernels()}
+    dev.programs[key] = kernels
     if len(dev.programs) > PROGRAM_CACHE_SIZE:
         dev.programs.popitem(last=False)
-    return kernel
+    return kernels
 
 
 def build_options(cl, dev: Device, precision: str) -> list[str]:

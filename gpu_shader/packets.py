@@ -25,8 +25,10 @@ from .vectorise import vectorise
 
 # How the packet entry point calls into the program: every argument a packet, and trace
 # with the mask of the lanes inside the image.
-ROOTS = {"trace": (True, True), "camera_ray": (True, True)}
+ROOTS = {"trace": (True, True, True), "camera_ray": (True, True)}
 LIVE_ROOTS = {"trace"}
+# With the cone pre-pass, its kernel calls tile_start with a packet of tiles.
+PREPASS_ROOTS = {"tile_start": (True, True)}
 # A struct field of these types is picked lane by lane with `?:`; others with choose().
 _NATIVE = {"real", "int", "uint", "bool"}
 
@@ -49,15 +51,16 @@ def packet_source(scalar, language: Dialect) -> str:
     # The text depends only on the scene's structure, and a frame asks for it again: keep
     # it, as gpu_shader.opencl keeps the programs built from it.
     return _packet_source(scalar.defines, scalar.functions, scalar.path_labels,
-                          max(1, len(scalar.parameters)), language)
+                          max(1, len(scalar.parameters)), language, bool(scalar.prepass_tile))
 
 
 @lru_cache(maxsize=32)
 def _packet_source(defines: str, functions: str, path_labels: bool, rows: int,
-                   language: Dialect) -> str:
+                   language: Dialect, prepass: bool = False) -> str:
     structs = program_structs(path_labels)
     program = parse(defines + "\n" + functions, structs)
-    packet, _ = vectorise(program, structs, ROOTS, LIVE_ROOTS)
+    packet, _ = vectorise(program, structs, dict(ROOTS, **PREPASS_ROOTS) if prepass else ROOTS,
+                          LIVE_ROOTS)
     parts = [
         language.prelude,
         _banner("parameters: one vec4 row each, set per frame")
@@ -69,7 +72,7 @@ def _packet_source(defines: str, functions: str, path_labels: bool, rows: int,
         _banner("the one-ray program, vectorised (gpu_shader/vectorise.py)")
         + format_program(packet),
         _banner("the entry point (glsl/main_packet.cl)")
-        + fill_template("main_packet.cl", path_labels=path_labels),
+        + fill_template("main_packet.cl", path_labels=path_labels, prepass=prepass),
     ]
     return language.finish("\n".join(parts))
 

@@ -2,7 +2,8 @@
 
 One full-screen draw writes three render targets (colour and hit, normal and depth in RGBA32F;
 steps, object id and path label in RGBA32I); reading them back gives the same `Frame` the
-NumPy reference returns.
+NumPy reference returns. With the cone pre-pass (``render.prepass = "cone"``) a first draw
+writes each tile's start into a small R32F texture, which the frame's draw reads.
 GL row r holds image row r counted from the top, so the read-back needs no flip.
 Programs are cached by their text, which depends only on the scene's structure: a new
 camera or a moved object only rewrites the parameter buffer.
@@ -75,6 +76,7 @@ class Renderer:
         self.ctx = ctx
         self.programs: OrderedDict[tuple[str, str], tuple] = OrderedDict()
         self.targets: OrderedDict[tuple[int, int], object] = OrderedDict()
+        self.start_targets: OrderedDict[tuple[int, int], object] = OrderedDict()
         self.max_block = int(ctx.info["GL_MAX_UNIFORM_BLOCK_SIZE"])
         self.flat_rows = min(MAX_FLAT_ROWS, int(ctx.info.get("GL_MAX_VARYING_VECTORS", 0)))
 
@@ -113,12 +115,29 @@ class Renderer:
         try:
             buffer.bind_to_uniform_block(0)
             program["Parameters"].binding = 0
+            if generated.prepass_tile:
+                starts = self._draw_starts(generated, width, height)
+                starts.color_attachments[0].use(location=0)
+                program["cone_starts"].value = 0
             fbo.use()
             fbo.viewport = (0, 0, width, height)
             self.draw(vao, width, height, progress)
         finally:
             buffer.release()
         return fbo
+
+    def _draw_starts(self, generated: Program, width: int, height: int):
+        """Draw the cone pre-pass of ``generated`` (its parameter block already bound) into
+        the tile-start target of a width x height frame; return that framebuffer."""
+        program, vao = self._program(generated.prepass_source, generated.vertex_source)
+        program["Parameters"].binding = 0
+        columns, rows = generated.tiles(width, height)
+        starts = self._cached(self.start_targets, (columns, rows), lambda: [
+            self.ctx.texture((columns, rows), 1, dtype="f4")])
+        starts.use()
+        starts.viewport = (0, 0, columns, rows)
+        vao.render(vertices=3)
+        return starts
 
     def read_frame(self, fbo, scene: Scene, width: int, height: int) -> Frame:
         """The `Frame` held by the planes of ``fbo`` (a `target` that ``scene`` was drawn
@@ -168,19 +187,23 @@ class Renderer:
     def target(self, width: int, height: int):
         """A framebuffer of the given size (kept for reuse): two RGBA32F textures and one
         RGBA32I, the planes of `gpu_shader.planes`."""
-        key = (width, height)
-        if key in self.targets:
-            self.targets.move_to_end(key)
-            return self.targets[key]
-        textures = [self.ctx.texture((width, height), 4, dtype=dtype)
-                    for dtype in ("f4", "f4", "i4")]
-        self.targets[key] = self.ctx.framebuffer(color_attachments=textures)
-        if len(self.targets) > TARGET_CACHE_SIZE:
-            _, old = self.targets.popitem(last=False)
+        return self._cached(self.targets, (width, height), lambda: [
+            self.ctx.texture((width, height), 4, dtype=dtype) for dtype in ("f4", "f4", "i4")])
+
+    def _cached(self, cache: OrderedDict, key, textures):
+        """The framebuffer of ``cache`` at ``key``, made on first use from the list of
+        textures that ``textures()`` returns; the least recently used beyond
+        `TARGET_CACHE_SIZE` is released."""
+        if key in cache:
+            cache.move_to_end(key)
+            return cache[key]
+        cache[key] = self.ctx.framebuffer(color_attachments=textures())
+        if len(cache) > TARGET_CACHE_SIZE:
+            _, old = cache.popitem(last=False)
             for texture in old.color_attachments:
                 texture.release()
             old.release()
-        return self.targets[key]
+        return cache[key]
 
 
 # Driver messages name lines as "0:123(4): error" (Mesa) or "0(123) : error" (NVIDIA).

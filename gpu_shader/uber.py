@@ -112,7 +112,7 @@ def uber_program(scene: Scene, width: int, height: int) -> Program:
     ``Program.source`` is the same text for every scene; ``Program.parameters`` is a
     (`ROWS`, 4) float64 array that fills the whole declared block. Raises MarchlabError, in
     one line, for what the uber shader cannot hold: an operator, a repetition, relaxed
-    marching, or more objects, lights or transforms than its tables have rows for.
+    marching, the cone pre-pass, or more objects, lights or transforms than its tables have rows for.
     """
     block = _header(scene, width, height)
     for k in STENCILS[scene.render.normal_method]:
@@ -150,6 +150,9 @@ def _header(scene: Scene, width: int, height: int) -> ParameterBlock:
     if s.relaxation != "none":
         raise MarchlabError(f"the uber shader marches with plain sphere tracing only "
                             f"(relaxation = {s.relaxation!r}); render with backend gpu")
+    if s.prepass != "none":
+        raise MarchlabError(f"the uber shader marches every ray from the eye (prepass = "
+                            f"{s.prepass!r}); render with backend gpu")
     for what, count, most in (("objects", len(scene.objects), MAX_OBJECTS),
                               ("lights", len(scene.lights), MAX_LIGHTS)):
         if count > most:
@@ -270,7 +273,8 @@ def _source(block: ParameterBlock) -> str:
          uber.select(["estimate_normal", "pixel_color"], provided=set(SCENE_FUNCTIONS))),
         ("the pixel, from its camera ray (glsl/pipeline/trace.glsl)",
          fill_template("pipeline/trace.glsl", reflections=False, path_labels=True, mode="")),
-        ("the entry point (glsl/main.frag)", fill_template(glsl.entry, path_labels=True)),
+        ("the entry point (glsl/main.frag)", fill_template(glsl.entry, path_labels=True,
+                                                                    prepass=False)),
     ]
     head = [glsl.prelude,
             _banner(f"parameters: {ROWS} rows whatever the scene; the first {HEADER_ROWS} (camera, "

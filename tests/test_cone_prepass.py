@@ -5,11 +5,13 @@ smaller than a tile, an eye inside a solid)."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
 import pytest
 
+from required_backends import need_backend
 from reference_cpu.cone_prepass import start_distances, tile_cones
 from reference_cpu.render import render
 from reference_cpu.scene_sdf import build_scene_sdf
@@ -19,6 +21,11 @@ from scene_model.scene import rendered_scene
 from scene_model.scenefile import load_scene
 
 EPSILON = 1e-3
+
+
+def with_cone_prepass(scene: Scene, tile: int) -> Scene:
+    return dataclasses.replace(scene, render=dataclasses.replace(
+        scene.render, prepass="cone", prepass_tile=tile))
 
 
 @pytest.mark.parametrize("width, height, tile, fov", [
@@ -73,16 +80,26 @@ HARD_CASES = {
 }
 
 
+# The float32 pre-pass computes its starts with float32 rays and distances; measured against
+# the float64 truth, a point may come closer by their rounding (about 1e-7 of a 20-unit
+# distance, times a few), well inside this.
+FLOAT32_ROUNDING = 2e-5
+
+
 @pytest.mark.parametrize("name", list(HARD_CASES))
 @pytest.mark.parametrize("tile", [4, 8])
-def test_no_point_of_a_ray_before_its_start_is_within_epsilon_of_a_surface(name, tile):
+@pytest.mark.parametrize("precision", ["float64", "float32"])
+def test_no_point_of_a_ray_before_its_start_is_within_epsilon_of_a_surface(name, tile,
+                                                                         precision):
     scene = HARD_CASES[name]
     scene = Scene(camera=scene.camera, objects=scene.objects,
                   render=RenderSettings(epsilon=EPSILON, max_distance=50.0))
     width, height = 48, 36
+    dtype = np.dtype(precision)
     start, _ = start_distances(scene.camera, width, height,
-                               build_scene_sdf(scene.objects, np.float64), tile, 256, EPSILON,
-                               50.0)
+                               build_scene_sdf(scene.objects, dtype), tile, 256, EPSILON,
+                               50.0, dtype)
+    start = start.astype(np.float64)
     origin, directions = camera_rays(scene.camera, width, height)
     directions, start = directions.reshape(-1, 3), start.reshape(-1)
     assert (start > 0).any(), "the pre-pass moved no ray: the check would hold trivially"
@@ -93,34 +110,68 @@ def test_no_point_of_a_ray_before_its_start_is_within_epsilon_of_a_surface(name,
         sdf = build_scene_sdf((solid,), np.float64)
         least = np.minimum(least, np.abs(_convex_min_distance(sdf, origin, directions,
                                                               start)))
-    assert least.min() >= EPSILON * (1 - 1e-9)
+    slack = EPSILON * 1e-9 if precision == "float64" else FLOAT32_ROUNDING
+    assert least.min() >= EPSILON - slack
 
 
+BACKENDS = [("numpy", "float64"), ("numpy", "float32"), ("opencl", "float64"),
+            ("opencl", "float32"), ("gpu", "float32")]
+
+
+def _render(scene, width, height, backend, precision):
+    from marchlab.render import render as render_with
+    if backend != "numpy":
+        need_backend(backend)
+    return render_with(scene, width, height, backend=backend, precision=precision)
+
+
+@pytest.mark.parametrize("backend, precision", BACKENDS)
 @pytest.mark.parametrize("name", ["classroom", "lights", "bounce", "csg"])
-def test_a_ray_marched_from_the_prepass_stops_in_the_same_surfaces_epsilon_band(name):
+def test_a_ray_marched_from_the_prepass_stops_in_the_same_surfaces_epsilon_band(
+        name, backend, precision):
     # Starting later changes where a ray samples the SDF, not the surfaces ahead of it:
     # where both marches stop on the same object, both stopped within epsilon of it, so
     # their distances differ by at most 2 epsilon / |cos| of the angle of incidence. Where
     # they stop on different objects, one of them stopped at a graze (a silhouette passed
     # within epsilon) or ran out of steps: a few pixels, as between float32 and float64.
     scene = rendered_scene(load_scene(name))
-    plain = render(scene, 96, 72)
-    cone = render(scene, 96, 72, prepass_tile=4)
+    plain = _render(scene, 96, 72, backend, precision)
+    cone = _render(with_cone_prepass(scene, 4), 96, 72, backend, precision)
     _, directions = camera_rays(scene.camera, 96, 72)
     same = plain.hit & cone.hit & (plain.object_id == cone.object_id)
-    cosine = np.abs(np.sum(plain.normal * directions, axis=-1))[same]
-    gap = np.abs(cone.depth[same] - plain.depth[same])
-    assert (gap * cosine <= 2 * scene.render.epsilon * (1 + 1e-6)).all()
+    cosine = np.abs(np.sum(plain.normal.astype(np.float64) * directions, axis=-1))[same]
+    gap = np.abs(cone.depth[same].astype(np.float64) - plain.depth[same])
+    # float32: the surface is found to its rounding at distances up to ~20 (2e-6), and the
+    # normal's angle to about 1e-3 rad.
+    slack = 1e-6 if precision == "float64" else 1e-4
+    assert (gap * cosine <= 2 * scene.render.epsilon * (1 + slack)).all()
     differing = (plain.hit != cone.hit) | (plain.object_id != cone.object_id)
     assert differing.mean() < 0.01
 
 
-def test_the_prepass_cuts_the_classrooms_primary_steps_by_a_third_or_more():
-    # Measured (docs/performance.md): 26.9 -> 16.2 steps a pixel at 160 x 120, tile 4.
+@pytest.mark.parametrize("backend, precision", BACKENDS)
+def test_the_prepass_cuts_the_classrooms_primary_steps_by_a_third_or_more(backend, precision):
+    # Measured (docs/performance.md): 26.9 -> 16.2 steps a pixel at 160 x 120, tile 4. The
+    # steps buffer counts each ray's own evaluations, in every backend.
     scene = rendered_scene(load_scene("classroom"))
-    plain = render(scene, 160, 120)
-    cone = render(scene, 160, 120, prepass_tile=4)
+    plain = _render(scene, 160, 120, backend, precision)
+    cone = _render(with_cone_prepass(scene, 4), 160, 120, backend, precision)
     assert cone.steps.mean() <= 2 / 3 * plain.steps.mean()
+
+
+@pytest.mark.parametrize("name", list(HARD_CASES))
+def test_opencl_float32_starts_every_ray_where_the_reference_does(name):
+    # Same operations in the same order (glsl/cone.glsl, reference_cpu/cone_prepass.py): the
+    # one-ray and packet programs find the reference's starts to the bit, so their frames'
+    # steps and depths are the reference's exactly.
+    from gpu_shader import opencl
+    need_backend("opencl")
+    scene = with_cone_prepass(HARD_CASES[name], 4)
+    reference = render(scene, 37, 29, "float32")
+    for packets in (True, False):
+        frame = opencl.render(scene, 37, 29, "float32", packets=packets)
+        np.testing.assert_array_equal(frame.steps, reference.steps)
+        np.testing.assert_array_equal(frame.depth, reference.depth)
 
 
 def test_the_start_on_a_grazing_floor_gets_most_of_the_way_to_the_floors_band():

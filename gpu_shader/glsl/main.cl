@@ -10,10 +10,26 @@
 // The calls below are written as in GLSL; generating the program passes the parameter buffer
 // P on as their first argument (thread_parameters in gpu_shader/dialects.py).
 
+{% if prepass %}
+// The cone pre-pass, run first: one work-item per tile of PREPASS_TILE x PREPASS_TILE pixels
+// (column, row of tiles, row 0 at the top), writing where its pixels' rays start.
+__kernel void cone_prepass(PARAMETERS, __global real* restrict cone_starts)
+{
+    int column = get_global_id(0);
+    int row = get_global_id(1);
+    int columns = ((int)(IMAGE_WIDTH) + (int)(PREPASS_TILE) - 1) / (int)(PREPASS_TILE);
+    int rows = ((int)(IMAGE_HEIGHT) + (int)(PREPASS_TILE) - 1) / (int)(PREPASS_TILE);
+    if (column >= columns || row >= rows) {
+        return;
+    }
+    cone_starts[row * columns + column] = tile_start((real)(column), (real)(row));
+}
+
+{% endif %}
 __kernel void render(PARAMETERS,
                      __global vec4* restrict color_hit,
                      __global vec4* restrict normal_depth,
-                     __global vec4* restrict steps_id)
+                     __global vec4* restrict steps_id{{ ",\n                     __global const real* restrict cone_starts" if prepass }})
 {
     // Work-item (column, row) is the pixel whose centre is (column + 0.5, row + 0.5), row 0
     // at the top, as in the reference. The launch may be padded to whole work-groups.
@@ -25,7 +41,14 @@ __kernel void render(PARAMETERS,
     real x = (real)(column) + 0.5;
     real y = (real)(row) + 0.5;
     vec3 direction = camera_ray(x, y);
-    Pixel px = trace(CAMERA_POSITION, direction);
+{% if prepass %}
+    int tile = (int)(PREPASS_TILE);
+    int columns = ((int)(IMAGE_WIDTH) + tile - 1) / tile;
+    real start = cone_starts[(row / tile) * columns + column / tile];
+{% else %}
+    real start = 0.0;
+{% endif %}
+    Pixel px = trace(CAMERA_POSITION, direction, start);
 
     Hit h = px.primary;
     int pixel = row * (int)(IMAGE_WIDTH) + column;

@@ -7,6 +7,11 @@ layout(location = 0) out vec4 out_color;     // rgb: colour in [0, 1], a: 1 on a
 layout(location = 1) out vec4 out_normal;    // xyz: unit normal, w: depth t (inf on a miss)
 layout(location = 2) out ivec4 out_steps;    // x: SDF evaluations, y: object id (-1),
                                              // z: path label (24 bits), 0 without labels
+{% if prepass %}
+// The start of each tile's rays, drawn by the pre-pass (glsl/prepass.frag): texel (i, j)
+// holds tile column i, tile row j counted from the top, as the image's rows are.
+uniform sampler2D cone_starts;
+{% endif %}
 
 void main()
 {
@@ -17,7 +22,12 @@ void main()
     real x = gl_FragCoord.x;
     real y = gl_FragCoord.y;
     vec3 direction = camera_ray(x, y);
-    Pixel px = trace(CAMERA_POSITION, direction);
+{% if prepass %}
+    real start = texelFetch(cone_starts, ivec2(gl_FragCoord.xy) / int(PREPASS_TILE), 0).x;
+{% else %}
+    real start = 0.0;
+{% endif %}
+    Pixel px = trace(CAMERA_POSITION, direction, start);
 
     Hit h = px.primary;
     out_color = vec4(clamp(px.color, 0.0, 1.0), float(h.hit));

@@ -7,10 +7,32 @@
 // The calls below are written as in GLSL; generating the program passes the parameter buffer
 // P on as their first argument (thread_parameters in gpu_shader/dialects.py).
 
+{% if prepass %}
+// The cone pre-pass, run first: one work-item per LANES neighbouring tiles of a row of
+// tiles, lane k the tile (first + k, row), writing where their pixels' rays start (see
+// main.cl). Lanes past the last column of tiles are left out of tile_start's mask `live`.
+__kernel void cone_prepass(PARAMETERS, __global real* restrict cone_starts)
+{
+    int first = get_global_id(0) * LANES;
+    int row = get_global_id(1);
+    int columns = ((int)(IMAGE_WIDTH) + (int)(PREPASS_TILE) - 1) / (int)(PREPASS_TILE);
+    int rows = ((int)(IMAGE_HEIGHT) + (int)(PREPASS_TILE) - 1) / (int)(PREPASS_TILE);
+    if (first >= columns || row >= rows) {
+        return;
+    }
+    ipacket tiles = first + LANE_INDEX;
+    packet start = tile_start(convert_packet(tiles), (packet)((real)(row)), tiles < columns);
+    int lanes = min(LANES, columns - first);
+    for (int k = 0; k < lanes; k++) {
+        cone_starts[row * columns + first + k] = start[k];
+    }
+}
+
+{% endif %}
 __kernel void render(PARAMETERS,
                      __global vec4* restrict color_hit,
                      __global vec4* restrict normal_depth,
-                     __global vec4* restrict steps_id)
+                     __global vec4* restrict steps_id{{ ",\n                     __global const real* restrict cone_starts" if prepass }})
 {
     // Work-item (i, row) holds the pixels first .. first + LANES - 1 of its row, lane k the
     // pixel whose centre is (first + k + 0.5, row + 0.5). Lanes past the image's right edge
@@ -26,7 +48,17 @@ __kernel void render(PARAMETERS,
     packet x = convert_packet(column) + 0.5;
     packet y = (real)(row) + 0.5;
     vec3p direction = camera_ray(x, y);
-    Pixel px = trace(splat3(CAMERA_POSITION), direction, inside);
+{% if prepass %}
+    int tile = (int)(PREPASS_TILE);
+    int columns = ((int)(IMAGE_WIDTH) + tile - 1) / tile;
+    packet start;
+    for (int k = 0; k < LANES; k++) {
+        start[k] = cone_starts[(row / tile) * columns + min(first + k, (int)(IMAGE_WIDTH) - 1) / tile];
+    }
+{% else %}
+    packet start = 0.0;
+{% endif %}
+    Pixel px = trace(splat3(CAMERA_POSITION), direction, start, inside);
 
     Hit h = px.primary;
     vec3p color = clamp(px.color, 0.0, 1.0);

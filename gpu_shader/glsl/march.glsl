@@ -1,6 +1,7 @@
 // Sphere tracing (Hart 1996) and shadow rays: the GLSL twins of reference_cpu/march.py and
 // reference_cpu/shadows.py. The rules are marchlab's contract (docs/scene-format.md):
 //
+//   t starts at `start` (0, or for a camera ray its tile's cone distance: glsl/cone.glsl);
 //   step i (1-based) evaluates d_i = |scene_sdf(o + t d)|; `steps` counts the evaluations;
 //   if d_i < EPSILON the ray hits at the current t;
 //   else t += d_i, and if t > limit the ray misses;
@@ -14,10 +15,10 @@
 // every step: this form drew the classroom scene about 8% faster than one that filled in
 // the result inside the loop (benchmarks/bench_render.py, docs/performance.md).
 
-Hit march(vec3 origin, vec3 direction, real limit)
+Hit march(vec3 origin, vec3 direction, real start, real limit)
 {
     uint objects = ray_objects(origin, direction);     // bounding-sphere culling, if on
-    precise real t = 0.0;
+    precise real t = start;
     real d = 0.0;
     int step;
     for (step = 1; step <= MAX_STEPS; step++) {
@@ -42,7 +43,7 @@ Hit march(vec3 origin, vec3 direction, real limit)
 // the surface point already pushed off the surface along its normal.
 real hard_shadow(vec3 origin, vec3 to_light, real light_distance)
 {
-    return march(origin, to_light, min(light_distance, MAX_DISTANCE)).hit == 1 ? 0.0 : 1.0;
+    return march(origin, to_light, 0.0, min(light_distance, MAX_DISTANCE)).hit == 1 ? 0.0 : 1.0;
 }
 
 // Penumbra estimate in [0, 1] (Quilez, "Soft shadows in raymarched SDFs", 2010): the same

@@ -5,10 +5,10 @@
 // (glsl/march.glsl); only the length of a step changes, and a step that may have jumped
 // over a surface is taken back.
 
-Hit march(vec3 origin, vec3 direction, real limit)
+Hit march(vec3 origin, vec3 direction, real start, real limit)
 {
     uint objects = ray_objects(origin, direction);
-    precise real t = 0.0;
+    precise real t = start;
     real t_prev = 0.0;          // the last point that was checked, and its distance
     real r_prev = 0.0;
     bool inside_prev = false;   // the distance at t_prev was negative

@@ -282,7 +282,7 @@ vec4 lit_pixel_color(vec3 origin, vec3 direction, Hit h, vec3 n, int id)
     vec3 d = direction;
     for (int bounce = 0; bounce <= REFLECTION_DEPTH; bounce++) {
         if (bounce > 0) {
-            h = march(o, d, MAX_DISTANCE);
+            h = march(o, d, 0.0, MAX_DISTANCE);
         }
         if (h.hit == 0) {
             color = color + weight * background(d);

@@ -107,17 +107,28 @@ def feature_cases() -> dict[str, Scene]:
     cases["bounding_spheres"] = base_scene(several, bounding_spheres=True)
     cases["relaxed_culled_mirrors"] = base_scene(mirrors, relaxation="auto", bounding_spheres=True,
                                                  reflection_depth=2)
+    # the cone pre-pass (docs/sphere-tracing.md, "Starting later"): alone, with tiles that do
+    # not divide the image, and with everything else that changes a march
+    cases["prepass_cone"] = base_scene(several, prepass="cone")
+    cases["prepass_cone_tile_5"] = base_scene(several, prepass="cone", prepass_tile=5,
+                                              shading="steps")
+    cases["prepass_relaxed_culled_mirrors"] = base_scene(
+        mirrors, prepass="cone", relaxation="auto", bounding_spheres=True, reflection_depth=2,
+        shadows="soft")
     return cases
 
 
 # The steps shading mode colours by an integer that a rounding difference can change by one
 # on any pixel (not only near edges): the 0.05% limit on such pixels needs more pixels.
-SIZES = {"steps": (128, 96)}
+SIZES = {"steps": (128, 96), "prepass_cone_tile_5": (128, 96)}
 
 
 def all_cases() -> list[tuple[str, Scene, tuple[int, int]]]:
     """(name, scene, size) for every bundled scene and every feature case."""
     out = [(f"scene:{name}", load_scene(name), BUNDLED_SIZE) for name in bundled_scene_names()]
+    # ... and each again with the cone pre-pass
+    out += [(f"scene:{name}+prepass", load_scene(name, ["render.prepass=cone"]), BUNDLED_SIZE)
+            for name in bundled_scene_names()]
     out += [(f"feature:{name}", scene, SIZES.get(name, SIZE))
             for name, scene in feature_cases().items()]
     return out

@@ -3,11 +3,12 @@
 {% if not reflections %}
 // One pixel, from its camera ray to everything the Frame holds (reference_cpu/render.py,
 // Tracer.trace): the primary ray's march and, on a hit, the normal and object id there;
-// then its colour{{ " and path label" if path_labels }} from pixel_color.
-Pixel trace(vec3 origin, vec3 direction)
+// then its colour{{ " and path label" if path_labels }} from pixel_color. The camera ray starts at `start`
+// (0, or its tile's cone distance: glsl/cone.glsl).
+Pixel trace(vec3 origin, vec3 direction, real start)
 {
     Pixel px;
-    px.primary = march(origin, direction, MAX_DISTANCE);
+    px.primary = march(origin, direction, start, MAX_DISTANCE);
     px.normal = vec3(0.0);
     px.id = -1;
     if (px.primary.hit == 1) {
@@ -31,8 +32,9 @@ Pixel trace(vec3 origin, vec3 direction)
 // ray that hits nothing adds the background. Bounce 0 is the camera ray: its march, normal
 // and object id are the pixel's primary buffers. (The reference marches the camera ray
 // first, then loops; here the loop does it, so that llvmpipe, which runs every statement of
-// a loop body for a whole block of pixels, never runs a march or a normal twice.)
-Pixel trace(vec3 origin, vec3 direction)
+// a loop body for a whole block of pixels, never runs a march or a normal twice.) The camera
+// ray starts at `start` (0, or its tile's cone distance: glsl/cone.glsl), a mirror ray at 0.
+Pixel trace(vec3 origin, vec3 direction, real start)
 {
     Pixel px;
     px.normal = vec3(0.0);
@@ -44,8 +46,9 @@ Pixel trace(vec3 origin, vec3 direction)
     real weight = 1.0;
     vec3 o = origin;
     vec3 d = direction;
+    real t0 = start;
     for (int bounce = 0; bounce <= REFLECTION_DEPTH; bounce++) {
-        Hit h = march(o, d, MAX_DISTANCE);
+        Hit h = march(o, d, t0, MAX_DISTANCE);
         if (bounce == 0) {
             px.primary = h;
         }
@@ -83,6 +86,7 @@ Pixel trace(vec3 origin, vec3 direction)
         // Continue just off the mirror, in the mirrored direction.
         o = p + SURFACE_OFFSET * n;
         d = reflect(d, n);
+        t0 = 0.0;
     }
     px.color = color;
 {% if path_labels %}
