@@ -54,6 +54,8 @@ MARCHING = {
     "auto": {"relaxation": "auto"},
     "auto + spheres": {"relaxation": "auto", "bounding_spheres": True},
     "plain + spheres": {"bounding_spheres": True},
+    "cone": {"prepass": "cone"},
+    "cone + auto": {"prepass": "cone", "relaxation": "auto"},
 }
 OTHER = {
     "max_steps 64": {"max_steps": 64},
@@ -203,7 +205,8 @@ def measure(name, scene, reference: SceneTruth, gold, backend, precision, settin
                                 frame.depth[frame.hit])
     differ = frame.hit != truth.hit
     angle = angle_deg(frame.normal[both].astype(np.float64), reference.normal[both])
-    steps = frame.steps.astype(np.float64)
+    steps = frame.steps.astype(np.float64) + prepass_share(configured(scene, change), width,
+                                                           height, precision)
     errors = {"depth_mean": statistic(depth_error, np.mean), "depth_p99": statistic(depth_error, p99),
               "depth_max": statistic(depth_error, np.max),
               "normal_p99_deg": statistic(angle, p99), "normal_max_deg": statistic(angle, np.max)}
@@ -226,6 +229,26 @@ def measure(name, scene, reference: SceneTruth, gold, backend, precision, settin
         notes=[] if np.isfinite(frame.color).all() else ["non-finite colour"],
         truth=reference.label(), within_truth=marked)
     return row, frame.hit
+
+
+def prepass_share(scene: Scene, width: int, height: int, precision: str) -> np.ndarray:
+    """(H, W): each pixel's share of the cone pre-pass's SDF evaluations (its tile's cone
+    steps over the tile's pixels; 0 without a pre-pass), so that a row's steps per pixel
+    count all the work. The same in every backend: they run the same cone march."""
+    from reference_cpu.cone_prepass import start_distances
+    from reference_cpu.scene_sdf import build_scene_sdf
+    r = scene.render
+    if r.prepass == "none":
+        return np.zeros((height, width))
+    dtype, tile = np.dtype(precision), r.prepass_tile
+    _, tile_steps = start_distances(scene.camera, width, height,
+                                    build_scene_sdf(rendered_scene(scene).objects, dtype),
+                                    tile, r.max_steps, r.epsilon, r.max_distance, dtype)
+    spread = lambda a: np.repeat(np.repeat(a, tile, axis=0), tile, axis=1)[:height, :width]
+    ones = np.ones((height, width))
+    counts = np.add.reduceat(np.add.reduceat(ones, np.arange(0, height, tile), axis=0),
+                             np.arange(0, width, tile), axis=1)     # pixels in each tile
+    return spread(tile_steps / counts)
 
 
 def backends_present() -> list[tuple[str, str]]:

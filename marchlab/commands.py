@@ -115,13 +115,20 @@ def cmd_shader(args) -> int:
     """``marchlab shader``: the program generated for a scene, as a backend compiles it."""
     scene = load_scene(args.scene, args.set)
     from gpu_shader.generate import generate     # no OpenGL needed to generate
-    source = generate(rendered_scene(scene), 640, 480, dialect=args.dialect,
-                      precision=args.precision, path_labels=args.path_labels).source
-    if args.numbered:
-        lines = source.splitlines()
-        width = len(str(len(lines)))
-        source = "".join(f"{i:>{width}}  {line}\n" for i, line in enumerate(lines, 1))
-    print(source, end="")
+    program = generate(rendered_scene(scene), 640, 480, dialect=args.dialect,
+                       precision=args.precision, path_labels=args.path_labels)
+    sources = [program.source]
+    if program.prepass_source:      # GLSL draws the cone pre-pass with a program of its own
+        sources.append(program.prepass_source)
+    for n, source in enumerate(sources):
+        if n:
+            print("// ==== the cone pre-pass's fragment shader, drawn before the program "
+                  "above (its own line numbers) ====")
+        if args.numbered:
+            lines = source.splitlines()
+            width = len(str(len(lines)))
+            source = "".join(f"{i:>{width}}  {line}\n" for i, line in enumerate(lines, 1))
+        print(source, end="")
     return 0
 
 

@@ -47,3 +47,14 @@ def test_show_applies_set_overrides(tmp_path, capsys):
     path = tmp_path / "shown.toml"
     path.write_text(out, encoding="utf-8")
     assert load_scene(path).render.max_steps == 64 != load_scene("classroom").render.max_steps
+
+
+def test_shader_prints_the_cone_prepass_program_after_the_frames_program(capsys):
+    code, out, _ = run_cli(capsys, "shader", "classroom", "--set", "render.prepass=cone")
+    assert code == 0
+    frame, prepass = out.split("// ==== the cone pre-pass's fragment shader")
+    assert "texelFetch(cone_starts" in frame and "tile_start(" not in frame
+    assert "out_start = tile_start(" in prepass and "real cone_march(" in prepass
+    code, out, _ = run_cli(capsys, "shader", "classroom", "--dialect", "opencl",
+                           "--set", "render.prepass=cone")
+    assert code == 0 and "__kernel void cone_prepass(" in out and "====" not in out
