@@ -112,7 +112,8 @@ def uber_program(scene: Scene, width: int, height: int) -> Program:
     ``Program.source`` is the same text for every scene; ``Program.parameters`` is a
     (`ROWS`, 4) float64 array that fills the whole declared block. Raises MarchlabError, in
     one line, for what the uber shader cannot hold: an operator, a repetition, relaxed
-    marching, the cone pre-pass, or more objects, lights or transforms than its tables have rows for.
+    marching, the cone pre-pass, or more objects, lights or transforms than its tables have
+    rows for.
     """
     block = _header(scene, width, height)
     for k in STENCILS[scene.render.normal_method]:

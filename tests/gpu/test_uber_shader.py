@@ -178,6 +178,13 @@ def test_relaxed_marching_gives_a_one_line_error():
     assert "\n" not in str(caught.value)
 
 
+def test_the_cone_prepass_gives_a_one_line_error():
+    scene = with_settings(load_scene("classroom"), prepass="cone")
+    with pytest.raises(MarchlabError, match="prepass = 'cone'") as caught:
+        uber_program(scene, 32, 24)
+    assert "\n" not in str(caught.value)
+
+
 def test_too_many_objects_gives_a_one_line_error():
     scene = Scene(objects=tuple(sphere(0.1).at(i, 0, 0) for i in range(33)))
     with pytest.raises(MarchlabError, match="at most 32 objects") as caught:
