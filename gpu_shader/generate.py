@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from reference_cpu.cone_prepass import CONE_SLACK, MIN_PROGRESS
+from reference_cpu.cone_prepass import CONE_SLACK, MIN_PROGRESS, tile_grid
 from reference_cpu.culling import culled_bounds
 from reference_cpu.normals import STENCILS
 from reference_cpu.relaxation import SLOPE_WEIGHT
@@ -89,8 +89,7 @@ class Program:
 
     def tiles(self, width: int, height: int) -> tuple[int, int]:
         """(columns, rows) of pre-pass tiles of a width x height image."""
-        tile = self.prepass_tile
-        return -(-width // tile), -(-height // tile)
+        return tile_grid(width, height, self.prepass_tile)
 
 
 def generate(scene: Scene, width: int, height: int, dialect: str = "glsl",
@@ -173,6 +172,7 @@ class _Generator:
                             and any(m.kr > 0 for m in self.materials))
         self.fog = self.s.fog.density > 0 and self.s.shading in LIT_MODES
         self.prepass_tile = self.s.prepass_tile if self.s.prepass == "cone" else 0
+        self.cone_section: tuple[str, str] | None = None      # set by `sections`
         # Hard shadow rays toward two lights are marched together (hard_shadow_pair) with
         # plain sphere tracing (relaxed shadow rays keep the relaxed march of their own):
         # lights 0 .. paired_lights - 1, two by two. The last of an odd number, or every
@@ -189,7 +189,7 @@ class _Generator:
         if self.prepass_tile and self.d.prepass_entry:
             # The cone march is a program of its own here (a first draw into a small
             # texture): the geometry and camera, then the pre-pass, then its entry point.
-            cone = next(i for i, (title, _) in enumerate(parts) if title.startswith("the cone"))
+            cone = parts.index(self.cone_section)
             prepass_parts = parts[:cone + 1] + [self.entry(self.d.prepass_entry)]
             del parts[cone]
         parts.append(self.entry(self.d.entry))
@@ -237,8 +237,9 @@ class _Generator:
             self.features.add("prepass:cone")
             defines = (f"#define MIN_PROGRESS {self.d.literal(MIN_PROGRESS)}\n"
                        f"#define CONE_SLACK {self.d.literal(CONE_SLACK)}\n\n")
-            parts.append((f"the cone pre-pass ({self.file('cone')})",
-                          defines + self.d.library("cone").select(["tile_start"])))
+            self.cone_section = (f"the cone pre-pass ({self.file('cone')})",
+                                 defines + self.d.library("cone").select(["tile_start"]))
+            parts.append(self.cone_section)
         parts += self.march_parts()
         parts.append(("surface normals (glsl/pipeline/normals.glsl)", self.normal_code()))
         parts += self.shading_parts()

@@ -196,13 +196,14 @@ def render(scene: Scene, width: int, height: int, precision: str = "float32",
     if program.prepass_tile:
         # The cone pre-pass first: one work-item per tile (per LANES tiles of a row in the
         # packet program), into the buffer of tile starts that the frame's kernel reads.
-        columns, rows = program.tiles(width, height)
-        starts = cl.Buffer(dev.context, flags.READ_WRITE, columns * rows * dtype.itemsize)
+        tile_columns, tile_rows = program.tiles(width, height)
+        starts = cl.Buffer(dev.context, flags.READ_WRITE,
+                           tile_columns * tile_rows * dtype.itemsize)
         prepass = kernels["cone_prepass"]
         prepass.set_args(parameters, starts)
-        items = -(-columns // PACKET_LANES) if packets else columns
+        items = -(-tile_columns // PACKET_LANES) if packets else tile_columns
         cl.enqueue_nd_range_kernel(dev.queue, prepass, (_round_up(items, local[0]),
-                                                        _round_up(rows, local[1])), local)
+                                                        _round_up(tile_rows, local[1])), local)
         outputs.append(starts)
     kernel.set_args(parameters, *outputs)
     columns = -(-width // PACKET_LANES) if packets else width     # work-items per row

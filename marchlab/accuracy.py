@@ -235,7 +235,7 @@ def prepass_share(scene: Scene, width: int, height: int, precision: str) -> np.n
     """(H, W): each pixel's share of the cone pre-pass's SDF evaluations (its tile's cone
     steps over the tile's pixels; 0 without a pre-pass), so that a row's steps per pixel
     count all the work. The same in every backend: they run the same cone march."""
-    from reference_cpu.cone_prepass import start_distances
+    from reference_cpu.cone_prepass import over_pixels, start_distances, tile_pixels
     from reference_cpu.scene_sdf import build_scene_sdf
     r = scene.render
     if r.prepass == "none":
@@ -244,11 +244,7 @@ def prepass_share(scene: Scene, width: int, height: int, precision: str) -> np.n
     _, tile_steps = start_distances(scene.camera, width, height,
                                     build_scene_sdf(rendered_scene(scene).objects, dtype),
                                     tile, r.max_steps, r.epsilon, r.max_distance, dtype)
-    spread = lambda a: np.repeat(np.repeat(a, tile, axis=0), tile, axis=1)[:height, :width]
-    ones = np.ones((height, width))
-    counts = np.add.reduceat(np.add.reduceat(ones, np.arange(0, height, tile), axis=0),
-                             np.arange(0, width, tile), axis=1)     # pixels in each tile
-    return spread(tile_steps / counts)
+    return over_pixels(tile_steps / tile_pixels(width, height, tile), width, height, tile)
 
 
 def backends_present() -> list[tuple[str, str]]:

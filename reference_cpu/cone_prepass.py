@@ -56,6 +56,24 @@ MIN_PROGRESS = 0.1
 CONE_SLACK = 1e-6
 
 
+def tile_grid(width: int, height: int, tile: int) -> tuple[int, int]:
+    """(TW, TH): the columns and rows of ``tile`` x ``tile`` tiles that cover a width x height
+    image, the last of each cut by the image's edge."""
+    return -(-width // tile), -(-height // tile)
+
+
+def tile_pixels(width: int, height: int, tile: int) -> np.ndarray:
+    """(TH, TW) int: how many pixels each tile holds (fewer at the right and bottom edges)."""
+    widths = np.minimum(tile, width - np.arange(0, width, tile))
+    heights = np.minimum(tile, height - np.arange(0, height, tile))
+    return np.outer(heights, widths)
+
+
+def over_pixels(per_tile: np.ndarray, width: int, height: int, tile: int) -> np.ndarray:
+    """(H, W): each pixel given its tile's value of ``per_tile`` (TH, TW)."""
+    return np.repeat(np.repeat(per_tile, tile, axis=0), tile, axis=1)[:height, :width]
+
+
 def tile_cones(camera: Camera, width: int, height: int, tile: int, dtype=np.float64):
     """The cone of each tile of ``tile`` x ``tile`` pixels (tiles at the right and bottom
     edges may be smaller): the axis through the tile's centre and the half-angle that holds
@@ -74,7 +92,7 @@ def tile_cones(camera: Camera, width: int, height: int, tile: int, dtype=np.floa
         tan(theta) of each cone, plus `CONE_SLACK`.
     """
     dtype = np.dtype(dtype)
-    tiles_wide, tiles_high = -(-width // tile), -(-height // tile)
+    tiles_wide, tiles_high = tile_grid(width, height, tile)
     x0 = np.arange(tiles_wide, dtype=dtype)[None, :] * dtype.type(tile)
     y0 = np.arange(tiles_high, dtype=dtype)[:, None] * dtype.type(tile)
     x1 = np.minimum(x0 + dtype.type(tile), dtype.type(width))
@@ -163,5 +181,4 @@ def start_distances(camera: Camera, width: int, height: int, sdf, tile: int, max
     t, steps = cone_march(camera.position, axes.reshape(-1, 3), tan_half.reshape(-1), sdf,
                           max_steps, epsilon, max_distance)
     t, steps = t.reshape(shape), steps.reshape(shape)
-    start = np.repeat(np.repeat(t, tile, axis=0), tile, axis=1)[:height, :width]
-    return start, steps
+    return over_pixels(t, width, height, tile), steps
