@@ -5,10 +5,10 @@ walls into a `physics.World`; `physics.simulate` steps it; `scene_model.scene.sc
 recorded centres back into the scene for a renderer. `frame_plan` decides which steps become
 frames: the time step stays fixed, the frame rate only chooses how often to look.
 
-Which objects the bodies collide with: every **top-level plane** of ``objects``, moved by any
-number of ``translate`` wrappers (the ``position`` shorthand), is a static plane of the world.
-A plane that is rotated, scaled or inside a CSG operator is drawn but not collided with, and
-no other shape is collided with.
+Which objects the bodies collide with: every top-level object of ``objects``. A plane moved
+only by ``translate`` wrappers (the ``position`` shorthand) is an exact static plane of the
+world; every other object (a box, a bowl carved by a subtraction, pegs made by repetition, a
+rotated plane) is a static shape given by the renderer's own SDF (marchlab/colliders.py).
 """
 
 from __future__ import annotations
@@ -25,9 +25,9 @@ from physics.errors import choice
 from scene_model.bodies import PhysicsSettings
 from scene_model.errors import MarchlabError, SceneError
 from scene_model.scene import Scene
-from scene_model.shapes import Plane, Translate
 
 from .budget import check_physics
+from .colliders import scene_shapes, static_planes
 
 PROGRESS_STEPS = 64        # physics steps between two progress reports
 
@@ -66,26 +66,9 @@ def physics_settings(scene: Scene) -> PhysicsSettings:
     return scene.physics or PhysicsSettings()
 
 
-def static_planes(scene: Scene) -> list[tuple[tuple[float, float, float], float]]:
-    """The planes the bodies collide with, as (unit normal, offset) with ``n . x = offset``.
-
-    A scene's plane is ``n/|n| . x = offset`` (reference_cpu.sdf.sdf_plane); moved by ``t`` it
-    becomes ``n/|n| . x = offset + n/|n| . t``.
-    """
-    planes = []
-    for node in scene.objects:
-        shift = np.zeros(3)
-        while isinstance(node, Translate):
-            shift += node.offset
-            node = node.child
-        if isinstance(node, Plane):
-            normal = np.asarray(node.normal) / math.sqrt(np.dot(node.normal, node.normal))
-            planes.append((tuple(normal.tolist()), float(node.offset + normal @ shift)))
-    return planes
-
-
 def build_world(scene: Scene, dtype=np.float64) -> physics.World:
-    """A `physics.World` holding the scene's bodies (in order) and its static planes.
+    """A `physics.World` holding the scene's bodies (in order), its static planes and every
+    other top-level object as a static shape (`marchlab.colliders.scene_shapes`).
 
     Parameters
     ----------
@@ -126,6 +109,8 @@ def build_world(scene: Scene, dtype=np.float64) -> physics.World:
     for normal, offset in static_planes(scene):
         world.add_plane(normal, offset, restitution=settings.plane_restitution,
                         friction=settings.plane_friction)
+    for shape in scene_shapes(scene, settings, dtype):
+        world.add_shape(shape)
     return world
 
 

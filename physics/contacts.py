@@ -6,13 +6,14 @@ distance between the surfaces, negative when they overlap:
 
     sphere-sphere   gap = |x_a - x_b| - (r_a + r_b),   n = (x_a - x_b) / |x_a - x_b|
     sphere-plane    gap = n_p . x_a - offset - r_a,     n = n_p            (plane n_p . x = offset)
+    sphere-shape    gap = d(x_a) - r_a,                 n = grad d / |grad d|   (colliders.py)
 
 (Ericson, Real-Time Collision Detection, 2005, ch. 4.3 and 5.2 give the same tests.) Two centres
 that coincide have no direction between them; they get a fixed fallback normal, +y, so the
 answer is deterministic and never NaN.
 
 The static world is stored as one extra body after the last sphere, index N, with zero inverse
-mass: the solvers then treat plane contacts and sphere contacts with the same formulas.
+mass: the solvers then treat plane, shape and sphere contacts with the same formulas.
 """
 
 from __future__ import annotations
@@ -22,9 +23,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from physics.broadphase import CROWD_WINDOW, find_pairs
+from physics.colliders import FALLBACK_NORMAL, shape_contacts
 from scene_model.geometry import dot
-
-FALLBACK_NORMAL = (0.0, 1.0, 0.0)
 
 
 @dataclass
@@ -34,9 +34,14 @@ class Contacts:
     Attributes
     ----------
     a, b : (K,) int64
-        The bodies; b is N (the static world) for a plane contact.
+        The bodies; b is N (the static world) for a plane or shape contact.
     plane : (K,) int64
-        The plane's index for a sphere-plane contact, -1 for a sphere-sphere one.
+        The plane's index for a sphere-plane contact, -1 for any other.
+    shape : (K,) int64
+        The shape's index for a sphere-shape contact, -1 for any other.
+    slot : (K,) int64
+        Which of a ball's contacts with one shape this is (0 for the nearest surface; see
+        colliders.py), 0 for the others.
     normal : (K, 3)
         Unit normal from b toward a.
     gap : (K,)
@@ -50,6 +55,8 @@ class Contacts:
     a: np.ndarray
     b: np.ndarray
     plane: np.ndarray
+    shape: np.ndarray
+    slot: np.ndarray
     normal: np.ndarray
     gap: np.ndarray
     radius_a: np.ndarray
@@ -64,9 +71,20 @@ class Contacts:
         """The contacts where ``keep`` (K,) is True, in the same order."""
         return Contacts(**{name: value[keep] for name, value in vars(self).items()})
 
+    @property
+    def static(self) -> np.ndarray:
+        """(K,) bool: whether b is the static world (a plane or a shape)."""
+        return (self.plane >= 0) | (self.shape >= 0)
+
     def kind(self) -> np.ndarray:
-        """``"sphere-plane"`` or ``"sphere-sphere"`` for each contact, (K,) str."""
-        return np.where(self.plane >= 0, "sphere-plane", "sphere-sphere")
+        """``"sphere-plane"``, ``"sphere-shape"`` or ``"sphere-sphere"`` per contact, (K,)."""
+        return np.where(self.plane >= 0, "sphere-plane",
+                        np.where(self.shape >= 0, "sphere-shape", "sphere-sphere"))
+
+    def other(self) -> np.ndarray:
+        """(K,) int64: the plane, the shape or the sphere b, as an event names it."""
+        return np.where(self.plane >= 0, self.plane,
+                        np.where(self.shape >= 0, self.shape, self.b))
 
 
 def sphere_plane_gaps(position, radius, plane_normal, plane_offset) -> np.ndarray:
@@ -113,11 +131,12 @@ def spread_coincident(existing, new, distance, rng) -> np.ndarray:
 def find_contacts(world, reach: float, counter=None) -> Contacts:
     """Every contact with gap <= ``reach`` (m) among the active spheres of ``world``.
 
-    Plane contacts come first, ordered by (sphere, plane), then sphere pairs ordered by (a, b)
-    with a < b. The order depends only on the state, never on how the pairs were found.
-    Inside a crowd (spheres piled into each other far past touching, as when many are spawned
-    at one point) each sphere gets only the contacts of its nearest neighbours along a Morton
-    curve, so the work stays bounded (crowds.py). ``counter``: see `broadphase.find_pairs`.
+    Plane contacts come first, ordered by (sphere, plane), then shape contacts ordered by
+    (sphere, shape, slot), then sphere pairs ordered by (a, b) with a < b. The order depends
+    only on the state, never on how the pairs were found. Inside a crowd (spheres piled into
+    each other far past touching, as when many are spawned at one point) each sphere gets only
+    the contacts of its nearest neighbours along a Morton curve, so the work stays bounded
+    (crowds.py). ``counter``: see `broadphase.find_pairs`.
     """
     n = world.count
     dtype = world.dtype
@@ -128,6 +147,20 @@ def find_contacts(world, reach: float, counter=None) -> Contacts:
     body, plane = np.nonzero(gaps <= reach)             # row-major: sorted by (sphere, plane)
     plane_a = alive[body]
 
+    touching = [shape_contacts(shape, x, r, alive, reach) for shape in world.shapes]
+    shape_index = np.concatenate([np.full(len(c.body), q, np.int64)
+                                  for q, c in enumerate(touching)] + [np.zeros(0, np.int64)])
+    join = lambda name, empty: np.concatenate(  # noqa: E731
+        [getattr(c, name) for c in touching] + [empty]).astype(empty.dtype, copy=False)
+    shape_a = join("body", np.zeros(0, np.int64))
+    slot = join("slot", np.zeros(0, np.int64))
+    order = np.lexsort((slot, shape_index, shape_a))
+    shape_a, slot, shape_index = shape_a[order], slot[order], shape_index[order]
+    shape_normal = join("normal", np.zeros((0, 3), dtype))[order]
+    shape_gap = join("gap", np.zeros(0, dtype))[order]
+    shape_e = np.maximum(world.restitution[shape_a], join("restitution", np.zeros(0, dtype))[order])
+    shape_mu = np.sqrt(world.friction[shape_a] * join("friction", np.zeros(0, dtype))[order])
+
     i, j = find_pairs(x[alive], r[alive] + 0.5 * reach, CROWD_WINDOW, counter)
     a, b = alive[i], alive[j]
     normal, distance = sphere_sphere_normals(x, a, b)
@@ -135,18 +168,23 @@ def find_contacts(world, reach: float, counter=None) -> Contacts:
     near = gap <= reach
     a, b, normal, gap = a[near], b[near], normal[near], gap[near]
 
+    none = lambda count: np.full(count, -1, np.int64)  # noqa: E731
     return Contacts(
-        a=np.concatenate([plane_a, a]),
-        b=np.concatenate([np.full(len(plane_a), n, np.int64), b]),
-        plane=np.concatenate([plane, np.full(len(a), -1)]).astype(np.int64),
-        normal=np.concatenate([world.plane_normal[plane], normal]).astype(dtype, copy=False),
-        gap=np.concatenate([gaps[body, plane], gap]).astype(dtype, copy=False),
-        radius_a=np.concatenate([r[plane_a], r[a]]),
-        radius_b=np.concatenate([np.zeros(len(plane_a), dtype), r[b]]),
+        a=np.concatenate([plane_a, shape_a, a]),
+        b=np.concatenate([np.full(len(plane_a) + len(shape_a), n, np.int64), b]),
+        plane=np.concatenate([plane, none(len(shape_a) + len(a))]).astype(np.int64),
+        shape=np.concatenate([none(len(plane_a)), shape_index, none(len(a))]),
+        slot=np.concatenate([np.zeros(len(plane_a), np.int64), slot,
+                             np.zeros(len(a), np.int64)]),
+        normal=np.concatenate([world.plane_normal[plane], shape_normal,
+                               normal]).astype(dtype, copy=False),
+        gap=np.concatenate([gaps[body, plane], shape_gap, gap]).astype(dtype, copy=False),
+        radius_a=np.concatenate([r[plane_a], r[shape_a], r[a]]),
+        radius_b=np.concatenate([np.zeros(len(plane_a) + len(shape_a), dtype), r[b]]),
         restitution=np.concatenate([
-            np.maximum(world.restitution[plane_a], world.plane_restitution[plane]),
-            np.maximum(world.restitution[a], world.restitution[b])]),
+            np.maximum(world.restitution[plane_a], world.plane_restitution[plane]), shape_e,
+            np.maximum(world.restitution[a], world.restitution[b])]).astype(dtype, copy=False),
         friction=np.concatenate([
-            np.sqrt(world.friction[plane_a] * world.plane_friction[plane]),
-            np.sqrt(world.friction[a] * world.friction[b])]),
+            np.sqrt(world.friction[plane_a] * world.plane_friction[plane]), shape_mu,
+            np.sqrt(world.friction[a] * world.friction[b])]).astype(dtype, copy=False),
     )

@@ -18,6 +18,11 @@ by A_n and loses no digits when A_n is small. The body is stopped there, given t
 step. Bounces of a single ball are then exact for every integrator and every dt: at e = 1
 the apex never drifts, and the bounce happens at the floor, not above or below it.
 
+Against any other shape (a box, a bowl, pegs: colliders.py) the time of impact is found by
+conservative advancement along the same parabola, stepping by the SDF's distance over the
+largest speed, so it never steps through a wall; the ball gets the same impulse there, with
+the shape's normal.
+
 Between two spheres both move, so the test uses their straight paths over the step:
 |p + t d|^2 = R^2 with p, d the differences of the start points and displacements and R the
 sum of the radii. Both spheres are stopped at the first touch; the solver resolves the
@@ -29,8 +34,11 @@ from __future__ import annotations
 import numpy as np
 
 from physics.broadphase import CROWD_WINDOW, find_pairs
+from physics.colliders import first_shape_hit, surface_near
 from physics.contacts import sphere_plane_gaps
 from physics.impulses import collision_impulse, cross, effective_masses
+
+SKIN_SLOPS = 4      # the skin of a touching shape, in slops (see bounce_off_statics)
 from scene_model.geometry import dot
 
 
@@ -44,21 +52,26 @@ def first_plane_hit(gap, speed, acceleration, duration):
     return np.where(time <= duration, time, np.inf)
 
 
-def bounce_off_planes(world, start, u, acceleration, spin, skip, h, passes=3):
-    """Follow each body's parabola over the step, bouncing off planes it would cross.
+def bounce_off_statics(world, start, u, acceleration, spin, skip, h, passes=3):
+    """Follow each body's parabola over the step, bouncing off planes and shapes it would reach.
 
     Parameters
     ----------
     world : World
-        For the planes, radii, masses and coefficients.
+        For the planes, shapes, radii, masses and coefficients.
     start : (N, 3)
         Positions at the start of the step (m).
     u, acceleration : (N, 3)
         The parabola x(t) = start + t u + t^2 acceleration / 2 of each body (m/s, m/s^2).
     spin : (N, 3)
         Angular velocities after the solver (rad/s); updated in place at each bounce.
-    skip : (N, P) bool
-        Body-plane pairs already handled by the contact solver (touching at the start).
+    skip : (N, P + Q) bool
+        Body-plane and body-shape pairs already handled by the contact solver (touching at
+        the start): planes 0..P-1, then shapes. A touching plane is skipped. A shape is not:
+        a ball rolling on the floor of a box must still meet its wall. A ball is tested
+        against a shape it touches with its radius less a skin of `SKIN_SLOPS` slops, so
+        the surface it rests on is out of reach and any other still stops it (after at most
+        the skin's depth).
     h : float
         Step (s).
     passes : int
@@ -67,71 +80,134 @@ def bounce_off_planes(world, start, u, acceleration, spin, skip, h, passes=3):
     Returns
     -------
     bounced : (N,) bool
-        Bodies that hit a plane; only their rows of the results below are meaningful.
+        Bodies that hit a plane or shape; only their rows of the results below are meaningful.
     position, velocity_at_end, acceleration : (N, 3)
         Where each bounced body ends the step, its parabola velocity there and its acceleration.
-    hits : list of (body, plane, approach speed, normal impulse) arrays
+    hits : list of (body, static, approach speed, normal impulse) arrays
+        ``static`` < P is a plane, P + q is shape q.
+
+    Planes are met at their exact time of impact (`first_plane_hit`), shapes by conservative
+    advancement (`colliders.first_shape_hit`): a ball stops within half the world's slop of
+    a shape, so that the next step finds the contact.
     """
     n = world.count
+    planes = len(world.plane_offset)
     bounced = np.zeros(n, bool)
     position, velocity, acceleration = start.copy(), u.copy(), acceleration.copy()
     elapsed = np.zeros(n, start.dtype)
     skip = skip.copy()
     hits = []
-    if len(world.plane_offset) == 0:
+    if planes + len(world.shapes) == 0:
         passes = 0
     for _ in range(passes):
-        normal, offset = world.plane_normal, world.plane_offset
-        gap = sphere_plane_gaps(position, world.radius, normal, offset)
-        speed = dot(velocity[:, None, :], normal[None, :, :])
-        accel = dot(acceleration[:, None, :], normal[None, :, :])
-        remaining = (h - elapsed)[:, None]
-        time = np.where(skip | (gap < 0), np.inf,
-                        first_plane_hit(np.maximum(gap, 0), speed, accel, remaining))
+        remaining = h - elapsed
+        time = np.concatenate([_plane_times(world, position, velocity, acceleration,
+                                            remaining, skip[:, :planes]),
+                               _shape_times(world, position, velocity, acceleration,
+                                            remaining, skip[:, planes:])], axis=1)
         time = np.where(world.active[:, None], time, np.inf)
-        plane = np.argmin(time, axis=1)
-        body = np.flatnonzero(np.isfinite(time[np.arange(n), plane]))
+        static = np.argmin(time, axis=1)
+        body = np.flatnonzero(np.isfinite(time[np.arange(n), static]))
         if len(body) == 0:
             break
-        plane = plane[body]
-        t = time[body, plane][:, None]
+        static = static[body]
+        t = time[body, static][:, None]
         # Move to the moment of impact, on the parabola.
         position[body] += t * velocity[body] + (0.5 * t * t) * acceleration[body]
         velocity[body] += t * acceleration[body]
         elapsed[body] += t[:, 0]
-        approach, j = _impact(world, body, plane, velocity, spin)
-        hits.append((body, plane, approach, j))
-        # If the ball would fall back through the plane before the step ends, it has landed:
-        # it keeps no normal velocity and the plane holds it against any acceleration into it.
-        n_p = normal[plane]
+        n_s, e_s, mu_s = _surface(world, static, position[body])
+        approach, j = _impact(world, body, n_s, e_s, mu_s, velocity, spin)
+        hits.append((body, static, approach, j))
+        # If the ball would fall back through the surface before the step ends, it has landed:
+        # it keeps no normal velocity and the surface holds it against any acceleration into it.
         left = (h - elapsed[body])
-        u_n = dot(velocity[body], n_p)
-        a_n = dot(acceleration[body], n_p)
+        u_n = dot(velocity[body], n_s)
+        a_n = dot(acceleration[body], n_s)
         landed = u_n * left + 0.5 * a_n * left * left <= 0
-        velocity[body] -= (landed * u_n)[:, None] * n_p
-        acceleration[body] -= (landed * np.minimum(a_n, 0))[:, None] * n_p
-        skip[body, plane] = True
+        velocity[body] -= (landed * u_n)[:, None] * n_s
+        acceleration[body] -= (landed * np.minimum(a_n, 0))[:, None] * n_s
+        skip[body, static] = True      # the ball now touches it
         bounced[body] = True
     left = (h - elapsed)[:, None]
     end = position + left * velocity + (0.5 * left * left) * acceleration
     return bounced, end, velocity + left * acceleration, acceleration, hits
 
 
-def _impact(world, body, plane, velocity, spin):
-    """Apply the collision impulse of ``body`` against ``plane`` to velocity and spin (in place).
+def _plane_times(world, position, velocity, acceleration, remaining, skip):
+    """(N, P): each body's first time of impact with each plane, +inf for none or skipped."""
+    normal, offset = world.plane_normal, world.plane_offset
+    gap = sphere_plane_gaps(position, world.radius, normal, offset)
+    speed = dot(velocity[:, None, :], normal[None, :, :])
+    accel = dot(acceleration[:, None, :], normal[None, :, :])
+    return np.where(skip | (gap < 0), np.inf,
+                    first_plane_hit(np.maximum(gap, 0), speed, accel, remaining[:, None]))
+
+
+def _shape_times(world, position, velocity, acceleration, remaining, touching):
+    """(N, Q): each body's first time within half the slop of each shape, +inf for none.
+
+    ``touching`` (N, Q): pairs in contact, tested with the radius less the skin. Only bodies
+    that could reach the shape this step are advanced: those whose gap now is at most the
+    farthest they can travel in the time left (their speed bound times that time)."""
+    n = len(position)
+    touch = 0.5 * world.slop
+    skin = SKIN_SLOPS * world.slop
+    times = np.full((n, len(world.shapes)), np.inf)
+    end_velocity = velocity + remaining[:, None] * acceleration
+    travel = remaining * np.maximum(np.sqrt(dot(velocity, velocity)),
+                                    np.sqrt(dot(end_velocity, end_velocity)))
+    for q, shape in enumerate(world.shapes):
+        rows = np.flatnonzero(world.active)
+        if len(rows) == 0:
+            continue
+        radius = world.radius[rows] - np.where(touching[rows, q], skin, 0).astype(
+            position.dtype)
+        gap = np.asarray(shape.distance(position[rows]), position.dtype) - radius
+        reach = gap <= shape.lipschitz * travel[rows] + touch
+        rows, radius = rows[reach], radius[reach]
+        times[rows, q] = first_shape_hit(shape, position[rows], velocity[rows],
+                                         acceleration[rows], radius, remaining[rows], touch)
+    return times
+
+
+def _surface(world, static, position):
+    """Normal (K, 3), restitution (K,) and friction (K,) of the static thing each body meets:
+    plane ``static`` < P, else shape ``static`` - P at the body's position."""
+    planes = len(world.plane_offset)
+    k = len(static)
+    normal = np.zeros((k, 3), position.dtype)
+    restitution = np.zeros(k, position.dtype)
+    friction = np.zeros(k, position.dtype)
+    plane = static < planes
+    normal[plane] = world.plane_normal[static[plane]]
+    restitution[plane] = world.plane_restitution[static[plane]]
+    friction[plane] = world.plane_friction[static[plane]]
+    for q in np.unique(static[~plane] - planes):
+        rows = np.flatnonzero(static == planes + q)
+        shape = world.shapes[q]
+        here = position[rows]
+        normal[rows] = surface_near(shape, here, np.asarray(shape.distance(here),
+                                                            position.dtype))[1]
+        restitution[rows], friction[rows] = shape.coefficients(position[rows])
+    return normal, restitution, friction
+
+
+def _impact(world, body, normal, restitution, friction, velocity, spin):
+    """Apply the collision impulse of ``body`` against a static surface of unit ``normal``
+    (K, 3) and coefficients ``restitution``, ``friction`` (K,) to velocity and spin (in place).
 
     A contact approaching slower than the restitution threshold still gets an inelastic
     impulse: here the ball is at the wall, so something must stop it going through.
     """
-    normal = world.plane_normal[plane]
     static = np.zeros(len(body), velocity.dtype)
     inverse_mass, inverse_inertia = world.inverse_mass[body], world.inverse_inertia[body]
     radius = world.radius[body]
     v_rel = velocity[body] - cross(radius[:, None] * spin[body], normal)
     approach = -dot(v_rel, normal)
-    restitution = np.maximum(world.restitution[body], world.plane_restitution[plane])
+    restitution = np.maximum(world.restitution[body], restitution)
     restitution = np.where(approach > world.restitution_threshold, restitution, 0)
-    friction = np.sqrt(world.friction[body] * world.plane_friction[plane])
+    friction = np.sqrt(world.friction[body] * friction)
     k_normal, k_tangent = effective_masses(inverse_mass, static, inverse_inertia, static,
                                            radius, static)
     impulse, j, approach = collision_impulse(v_rel, normal, static, restitution, friction,

@@ -11,8 +11,8 @@ EVENT_DTYPE = np.dtype([("step", np.int64), ("time", np.float64), ("kind", "U13"
                         ("body", np.int64), ("other", np.int64), ("speed", np.float64),
                         ("impulse", np.float64)])
 """A contact event: at ``step`` (time s), ``body`` hit ``other`` (a body for "sphere-sphere", a
-plane for "sphere-plane", -1 for "left-bounds") approaching at ``speed`` (m/s), receiving the
-normal ``impulse`` (N s)."""
+plane for "sphere-plane", a shape for "sphere-shape", -1 for "left-bounds") approaching at
+``speed`` (m/s), receiving the normal ``impulse`` (N s)."""
 
 
 def make_events(step, time, kind, body, other, speed, impulse) -> np.ndarray:

@@ -51,6 +51,7 @@ from collections import Counter
 
 import numpy as np
 
+from physics.colliders import MAX_SHAPE_CONTACTS
 from physics.impulses import (SolverBodies, apply_impulse, collision_impulse, contact_impulse,
                               effective_masses, relative_velocity)
 from scene_model.geometry import dot
@@ -178,10 +179,14 @@ def sequential_levels(a, b, static: int) -> list:
     return np.split(order, bounds)
 
 
-def contact_keys(contacts, bodies: int, planes: int) -> np.ndarray:
-    """One int64 per contact that names it from step to step: (a, b) or (a, plane)."""
+def contact_keys(contacts, bodies: int, planes: int, shapes: int = 0) -> np.ndarray:
+    """One int64 per contact that names it from step to step: (a, b), (a, plane) or
+    (a, shape, slot)."""
+    statics = bodies + 1 + planes
     other = np.where(contacts.plane >= 0, bodies + 1 + contacts.plane, contacts.b)
-    return contacts.a * (bodies + 1 + planes) + other
+    other = np.where(contacts.shape >= 0,
+                     statics + contacts.shape * MAX_SHAPE_CONTACTS + contacts.slot, other)
+    return contacts.a * (statics + shapes * MAX_SHAPE_CONTACTS) + other
 
 
 def warm_start(keys, previous, dtype):

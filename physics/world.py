@@ -14,7 +14,8 @@ from collections import Counter
 import numpy as np
 
 from physics.contacts import find_contacts, spread_coincident
-from physics.continuous import bounce_off_planes, stop_sphere_sweeps
+from physics.colliders import Shape
+from physics.continuous import bounce_off_statics, stop_sphere_sweeps
 from physics.errors import (PhysicsError, bounds_box, choice, column, finite, float_dtype, in_range,
                             positive, rows, vector3, whole_number)
 from physics.events import EVENT_DTYPE, make_events
@@ -86,6 +87,7 @@ class World:
         self.active = np.zeros(0, bool)
         self.plane_normal, self.plane_offset = empty(3), empty()
         self.plane_restitution, self.plane_friction = empty(), empty()
+        self.shapes: list[Shape] = []     # static solids given by their SDF (colliders.py)
         self._events = []
         self._resting_impulses = None     # (keys, normal, tangent) of last step's contacts
         self.work = Counter()             # what the last step did: see `World.step`
@@ -188,6 +190,20 @@ class World:
         self.plane_friction = grow(self.plane_friction, [in_range(friction, "friction", 0)])
         return len(self.plane_offset) - 1
 
+    def add_shape(self, shape: Shape) -> int:
+        """Add a static solid given by its signed distance (a `physics.colliders.Shape`: a box,
+        a bowl, pegs, any SDF) and return its index among the shapes."""
+        if not isinstance(shape, Shape):
+            raise PhysicsError(f"a shape must be a physics.colliders.Shape (got "
+                               f"{type(shape).__name__})")
+        for name in ("restitution", "friction", "lipschitz"):
+            finite(getattr(shape, name), f"{shape.name or 'shape'} {name}")
+        in_range(shape.restitution, "restitution", 0, 1)
+        in_range(shape.friction, "friction", 0)
+        in_range(shape.lipschitz, "lipschitz", 1)
+        self.shapes.append(shape)
+        return len(self.shapes) - 1
+
     # --- derived state ------------------------------------------------------------------
 
     @property
@@ -284,7 +300,7 @@ class World:
         work = Counter()
         contacts = find_contacts(self, self.slop, work)
         approach = -dot(contacts.normal, v_old[contacts.a])
-        arriving = (contacts.plane >= 0) & (contacts.gap >= 0) & (
+        arriving = contacts.static & (contacts.gap >= 0) & (
             approach > self.restitution_threshold)
         contacts = contacts.select(~arriving)
         work["contacts"] = len(contacts)
@@ -294,10 +310,10 @@ class World:
                                                             self.dtype)])
         bodies = SolverBodies(pad(v), pad(self.angular_velocity), pad(self.inverse_mass),
                               pad(self.inverse_inertia))
-        # What this step's gravity added to each contact's normal velocity (plane contacts only:
-        # two falling spheres both gain h g, which cancels in their relative velocity).
-        gravity_part = np.where(contacts.plane >= 0, h * dot(contacts.normal, self.gravity), 0)
-        keys = contact_keys(contacts, n, len(self.plane_offset))
+        # What this step's gravity added to each contact's normal velocity (static contacts
+        # only: two falling spheres both gain h g, which cancels in their relative velocity).
+        gravity_part = np.where(contacts.static, h * dot(contacts.normal, self.gravity), 0)
+        keys = contact_keys(contacts, n, len(self.plane_offset), len(self.shapes))
         order = np.argsort(keys, kind="stable")
         warm = warm_start(keys, self._resting_impulses, self.dtype)
         collisions = SOLVERS[self.solver](bodies, contacts, gravity_part.astype(self.dtype), h,
@@ -311,13 +327,15 @@ class World:
         turn = scheme.positions(np.zeros_like(spin), self.angular_velocity, spin, h)
         self.orientation = rotate_orientations(self.orientation, turn)
 
-        # Continuous collision: bounce off planes crossed during the step, exactly ...
-        touching = np.zeros((n, len(self.plane_offset)), bool)
-        plane = contacts.plane >= 0
+        # Continuous collision: bounce off planes and shapes reached during the step ...
+        planes = len(self.plane_offset)
+        touching = np.zeros((n, planes + len(self.shapes)), bool)
+        plane, shape = contacts.plane >= 0, contacts.shape >= 0
         touching[contacts.a[plane], contacts.plane[plane]] = True
+        touching[contacts.a[shape], planes + contacts.shape[shape]] = True
         acceleration = (v_new - v_old) / h
         start_velocity = parabola_start_velocity(scheme, v_old, v_new, h)
-        bounced, end, end_velocity, end_acceleration, hits = bounce_off_planes(
+        bounced, end, end_velocity, end_acceleration, hits = bounce_off_statics(
             self, x_old, start_velocity, acceleration, spin, touching, h)
         x_new[bounced] = end[bounced]
         # ... and leave the velocity the integrator needs to carry on along the new parabola.
@@ -338,11 +356,13 @@ class World:
 
     def _record(self, contacts, collisions, hits) -> None:
         for index, approach, impulse in collisions:
-            plane = contacts.plane[index]
             self._add_events(contacts.kind()[index], contacts.a[index],
-                             np.where(plane >= 0, plane, contacts.b[index]), approach, impulse)
-        for body, plane, approach, impulse in hits:
-            self._add_events("sphere-plane", body, plane, approach, impulse)
+                             contacts.other()[index], approach, impulse)
+        planes = len(self.plane_offset)
+        for body, static, approach, impulse in hits:
+            self._add_events(np.where(static < planes, "sphere-plane", "sphere-shape"), body,
+                             np.where(static < planes, static, static - planes), approach,
+                             impulse)
 
     def _add_events(self, kind, body, other, speed, impulse) -> None:
         self._events.append(make_events(self.steps, self.time, kind, body, other, speed,

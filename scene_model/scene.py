@@ -12,7 +12,7 @@ import math
 from dataclasses import dataclass
 from typing import ClassVar, Literal
 
-from .bodies import Body, PhysicsSettings, body_sphere
+from .bodies import FRICTION, Body, PhysicsSettings, body_sphere
 from .errors import SceneError
 from .fields import (DIRECTION, POINT, SIZE, Color, Range, Record, Vec3, color_range, number_text,
                      param, unit_interval)
@@ -62,6 +62,12 @@ class Material(Record):
     shininess: float = param(32.0, "Specular exponent alpha.", Range(1.0, 10000.0))
     kr: float = param(0.0, "Mirror reflectivity: weight of the reflected colour.", unit_interval)
     checker: Checker | None = param(None, "Optional checker pattern replacing ``color``.")
+    restitution: float | None = param(None, "Coefficient of restitution of a static object of "
+                                            "this material, for the bodies; absent: "
+                                            "[physics] plane_restitution.", unit_interval)
+    friction: float | None = param(None, "Coefficient of friction of a static object of this "
+                                         "material, for the bodies; absent: [physics] "
+                                         "plane_friction.", FRICTION)
 
 
 # --- Lights ----------------------------------------------------------------------------------
