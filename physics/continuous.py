@@ -34,7 +34,7 @@ from __future__ import annotations
 import numpy as np
 
 from physics.broadphase import CROWD_WINDOW, find_pairs
-from physics.colliders import first_shape_hit, surface_near
+from physics.colliders import SAME_SURFACE, first_shape_hit, parabola, surface_near
 from physics.contacts import sphere_plane_gaps
 from physics.impulses import collision_impulse, cross, effective_masses
 
@@ -52,7 +52,8 @@ def first_plane_hit(gap, speed, acceleration, duration):
     return np.where(time <= duration, time, np.inf)
 
 
-def bounce_off_statics(world, start, u, acceleration, spin, skip, h, passes=3):
+def bounce_off_statics(world, start, u, acceleration, spin, skip, h, landing=None,
+                       resting=None, passes=3):
     """Follow each body's parabola over the step, bouncing off planes and shapes it would reach.
 
     Parameters
@@ -65,15 +66,22 @@ def bounce_off_statics(world, start, u, acceleration, spin, skip, h, passes=3):
         The parabola x(t) = start + t u + t^2 acceleration / 2 of each body (m/s, m/s^2).
     spin : (N, 3)
         Angular velocities after the solver (rad/s); updated in place at each bounce.
-    skip : (N, P + Q) bool
-        Body-plane and body-shape pairs already handled by the contact solver (touching at
-        the start): planes 0..P-1, then shapes. A touching plane is skipped. A shape is not:
-        a ball rolling on the floor of a box must still meet its wall. A ball is tested
-        against a shape it touches with its radius less a skin of `SKIN_SLOPS` slops, so
-        the surface it rests on is out of reach and any other still stops it (after at most
-        the skin's depth).
+    skip : (N, P) bool
+        Body-plane pairs already handled by the contact solver (touching at the start).
     h : float
         Step (s).
+    landing : (body (K,), shape (K,), normal (K, 3), offset (K,)), optional
+        Faces of shapes that bodies are arriving at (contacts with a gap >= 0, approaching,
+        which the solver left alone): each is met exactly on its tangent plane
+        ``normal . x = offset``, as a plane would be.
+    resting : (body (C,), shape (C,), normal (C, 3)), optional
+        The solver's contacts with shapes. A shape is not skipped because a ball touches it:
+        a ball rolling on the floor of a box must still meet its wall. Instead the ball is
+        advanced from its path lifted off each face it rests on by a skin of `SKIN_SLOPS`
+        slops, so those faces are out of reach and the others are where they were (exactly,
+        for faces at right angles). A face met that is one of these (velocity Verlet carries
+        the solver's impulse as an acceleration over the step, so its parabola may dip into
+        the face before turning) is not a new impact.
     passes : int
         Most bounces per body per step (a ball driven into a corner meets two or three walls).
 
@@ -87,24 +95,27 @@ def bounce_off_statics(world, start, u, acceleration, spin, skip, h, passes=3):
         ``static`` < P is a plane, P + q is shape q.
 
     Planes are met at their exact time of impact (`first_plane_hit`), shapes by conservative
-    advancement (`colliders.first_shape_hit`): a ball stops within half the world's slop of
-    a shape, so that the next step finds the contact.
+    advancement (`colliders.first_shape_hit`) refined on the tangent plane of the face met.
     """
     n = world.count
     planes = len(world.plane_offset)
+    dtype = start.dtype
     bounced = np.zeros(n, bool)
     position, velocity, acceleration = start.copy(), u.copy(), acceleration.copy()
-    elapsed = np.zeros(n, start.dtype)
+    elapsed = np.zeros(n, dtype)
     skip = skip.copy()
+    none = (np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros((0, 3), dtype))
+    landing = (*none, np.zeros(0, dtype)) if landing is None else landing
+    resting = none if resting is None else resting
     hits = []
     if planes + len(world.shapes) == 0:
         passes = 0
     for _ in range(passes):
         remaining = h - elapsed
+        shape_time, face_normal = _shape_times(world, position, velocity, acceleration,
+                                               remaining, landing, resting)
         time = np.concatenate([_plane_times(world, position, velocity, acceleration,
-                                            remaining, skip[:, :planes]),
-                               _shape_times(world, position, velocity, acceleration,
-                                            remaining, skip[:, planes:])], axis=1)
+                                            remaining, skip), shape_time], axis=1)
         time = np.where(world.active[:, None], time, np.inf)
         static = np.argmin(time, axis=1)
         body = np.flatnonzero(np.isfinite(time[np.arange(n), static]))
@@ -117,6 +128,10 @@ def bounce_off_statics(world, start, u, acceleration, spin, skip, h, passes=3):
         velocity[body] += t * acceleration[body]
         elapsed[body] += t[:, 0]
         n_s, e_s, mu_s = _surface(world, static, position[body])
+        # A shape's face has the normal found where it was met (the gradient at the centre
+        # gives the nearest face, which may be another one the ball already touches).
+        on_shape = static >= planes
+        n_s[on_shape] = face_normal[body[on_shape], static[on_shape] - planes]
         approach, j = _impact(world, body, n_s, e_s, mu_s, velocity, spin)
         hits.append((body, static, approach, j))
         # If the ball would fall back through the surface before the step ends, it has landed:
@@ -127,8 +142,16 @@ def bounce_off_statics(world, start, u, acceleration, spin, skip, h, passes=3):
         landed = u_n * left + 0.5 * a_n * left * left <= 0
         velocity[body] -= (landed * u_n)[:, None] * n_s
         acceleration[body] -= (landed * np.minimum(a_n, 0))[:, None] * n_s
-        skip[body, static] = True      # the ball now touches it
         bounced[body] = True
+        # The ball now touches what it met: a plane is skipped, a shape's face rests.
+        skip[body[~on_shape], static[~on_shape]] = True
+        met = np.zeros((n, len(world.shapes)), bool)
+        met[body[on_shape], static[on_shape] - planes] = True
+        keep = ~met[landing[0], landing[1]]
+        landing = tuple(part[keep] for part in landing)
+        resting = (np.concatenate([resting[0], body[on_shape]]),
+                   np.concatenate([resting[1], static[on_shape] - planes]),
+                   np.concatenate([resting[2], n_s[on_shape]]))
     left = (h - elapsed)[:, None]
     end = position + left * velocity + (0.5 * left * left) * acceleration
     return bounced, end, velocity + left * acceleration, acceleration, hits
@@ -144,36 +167,69 @@ def _plane_times(world, position, velocity, acceleration, remaining, skip):
                     first_plane_hit(np.maximum(gap, 0), speed, accel, remaining[:, None]))
 
 
-def _shape_times(world, position, velocity, acceleration, remaining, touching):
-    """(N, Q): each body's first time within half the slop of each shape, +inf for none.
+def _shape_times(world, position, velocity, acceleration, remaining, landing, resting):
+    """When and where each body first meets each shape in the time left.
 
-    ``touching`` (N, Q): pairs in contact, tested with the radius less the skin. Only bodies
-    that could reach the shape this step are advanced: those whose gap now is at most the
-    farthest they can travel in the time left (their speed bound times that time)."""
+    Returns (N, Q) times (s; +inf for none) and (N, Q, 3) the unit normals of the faces met.
+
+    The path of a body resting on faces of the shape (``resting``) is lifted off each by the
+    skin (see `bounce_off_statics`); a face met on the lifted path is met on the real one
+    when the gap along the face's normal, less the lift, reaches 0: the time is moved back
+    on the face's tangent plane to that moment. A body is advanced only if its gap now is at
+    most the farthest it can travel in the time left (its speed bound times that time).
+    ``landing`` faces are met on their tangent plane, exactly.
+    """
     n = len(position)
+    dtype = position.dtype
     touch = 0.5 * world.slop
     skin = SKIN_SLOPS * world.slop
     times = np.full((n, len(world.shapes)), np.inf)
+    normals = np.zeros((n, len(world.shapes), 3), dtype)
     end_velocity = velocity + remaining[:, None] * acceleration
     travel = remaining * np.maximum(np.sqrt(dot(velocity, velocity)),
                                     np.sqrt(dot(end_velocity, end_velocity)))
     for q, shape in enumerate(world.shapes):
+        mine = resting[1] == q
+        lift = np.zeros((n, 3), dtype)
+        np.add.at(lift, resting[0][mine], skin * resting[2][mine])
         rows = np.flatnonzero(world.active)
+        lifted = position[rows] + lift[rows]
+        gap = np.asarray(shape.distance(lifted), dtype) - world.radius[rows]
+        reach = gap <= shape.lipschitz * travel[rows] + touch
+        rows, lifted = rows[reach], lifted[reach]
+        time = first_shape_hit(shape, lifted, velocity[rows], acceleration[rows],
+                               world.radius[rows], remaining[rows], touch)
+        hit = np.isfinite(time)
+        rows, time, lifted = rows[hit], time[hit], lifted[hit]
         if len(rows) == 0:
             continue
-        radius = world.radius[rows] - np.where(touching[rows, q], skin, 0).astype(
-            position.dtype)
-        gap = np.asarray(shape.distance(position[rows]), position.dtype) - radius
-        reach = gap <= shape.lipschitz * travel[rows] + touch
-        rows, radius = rows[reach], radius[reach]
-        times[rows, q] = first_shape_hit(shape, position[rows], velocity[rows],
-                                         acceleration[rows], radius, remaining[rows], touch)
-    return times
+        p = parabola(lifted, velocity[rows], acceleration[rows], time)
+        depth, normal = surface_near(shape, p, np.asarray(shape.distance(p), dtype))
+        # Met again: a face the ball rests on (the solver's), not a new impact.
+        again = np.any((rows[:, None] == resting[0][mine][None, :])
+                       & (normal @ resting[2][mine].T > SAME_SURFACE), axis=1)
+        # gap(t) ~ gap_hit + (t - t_hit) v.n on the tangent plane: back to where it was 0.
+        gap_hit = depth - dot(lift[rows], normal) - world.radius[rows]
+        closing = dot(velocity[rows] + time[:, None] * acceleration[rows], normal)
+        back = (gap_hit < 0) & (closing < 0)
+        time = np.where(back, np.maximum(time - gap_hit / np.where(back, closing, 1), 0), time)
+        times[rows, q] = np.where(again, np.inf, time)
+        normals[rows, q] = normal
+    body, q, normal, offset = landing
+    gap = dot(position[body], normal) - offset - world.radius[body]
+    time = first_plane_hit(np.maximum(gap, 0), dot(velocity[body], normal),
+                           dot(acceleration[body], normal), remaining[body])
+    for row in np.flatnonzero(np.isfinite(time)):          # a few rows: arriving faces
+        if time[row] < times[body[row], q[row]]:
+            times[body[row], q[row]] = time[row]
+            normals[body[row], q[row]] = normal[row]
+    return times, normals
 
 
 def _surface(world, static, position):
     """Normal (K, 3), restitution (K,) and friction (K,) of the static thing each body meets:
-    plane ``static`` < P, else shape ``static`` - P at the body's position."""
+    plane ``static`` < P, else shape ``static`` - P at the body's position (its normal is
+    left 0: `_shape_times` found it)."""
     planes = len(world.plane_offset)
     k = len(static)
     normal = np.zeros((k, 3), position.dtype)
@@ -185,11 +241,7 @@ def _surface(world, static, position):
     friction[plane] = world.plane_friction[static[plane]]
     for q in np.unique(static[~plane] - planes):
         rows = np.flatnonzero(static == planes + q)
-        shape = world.shapes[q]
-        here = position[rows]
-        normal[rows] = surface_near(shape, here, np.asarray(shape.distance(here),
-                                                            position.dtype))[1]
-        restitution[rows], friction[rows] = shape.coefficients(position[rows])
+        restitution[rows], friction[rows] = world.shapes[q].coefficients(position[rows])
     return normal, restitution, friction
 
 

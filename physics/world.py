@@ -302,6 +302,8 @@ class World:
         approach = -dot(contacts.normal, v_old[contacts.a])
         arriving = contacts.static & (contacts.gap >= 0) & (
             approach > self.restitution_threshold)
+        # An arriving face of a shape is met on its tangent plane (bounce_off_statics).
+        landing = contacts.select(arriving & (contacts.shape >= 0))
         contacts = contacts.select(~arriving)
         work["contacts"] = len(contacts)
 
@@ -328,15 +330,16 @@ class World:
         self.orientation = rotate_orientations(self.orientation, turn)
 
         # Continuous collision: bounce off planes and shapes reached during the step ...
-        planes = len(self.plane_offset)
-        touching = np.zeros((n, planes + len(self.shapes)), bool)
+        touching = np.zeros((n, len(self.plane_offset)), bool)
         plane, shape = contacts.plane >= 0, contacts.shape >= 0
         touching[contacts.a[plane], contacts.plane[plane]] = True
-        touching[contacts.a[shape], planes + contacts.shape[shape]] = True
         acceleration = (v_new - v_old) / h
         start_velocity = parabola_start_velocity(scheme, v_old, v_new, h)
         bounced, end, end_velocity, end_acceleration, hits = bounce_off_statics(
-            self, x_old, start_velocity, acceleration, spin, touching, h)
+            self, x_old, start_velocity, acceleration, spin, touching, h,
+            landing=(landing.a, landing.shape, landing.normal,
+                     dot(landing.normal, x_old[landing.a]) - landing.gap - landing.radius_a),
+            resting=(contacts.a[shape], contacts.shape[shape], contacts.normal[shape]))
         x_new[bounced] = end[bounced]
         # ... and leave the velocity the integrator needs to carry on along the new parabola.
         v_new[bounced] = (end_velocity[bounced]
