@@ -183,6 +183,13 @@ def build_parser() -> Parser:
                    help="renderer (default: gpu if it can run here, else numpy)")
     p.add_argument("--csv", metavar="FILE",
                    help="also write the trajectory: one row per frame and body")
+    p.add_argument("--save-state", metavar="FILE",
+                   help="also write the world's full state at the last frame to FILE (.npz): "
+                        "positions, velocities, spins, time, random generator, warm start")
+    p.add_argument("--load-state", metavar="FILE",
+                   help="start from a state saved with --save-state for the same scene "
+                        "instead of the scene's bodies; the run carries on bit for bit, its "
+                        "frames and CSV times starting at the saved time")
     p.add_argument("--set", action="extend", nargs="+", default=[], metavar="FIELD=VALUE",
                    help="override scene fields, e.g. --set physics.dt=0.001 "
                         "bodies[0].restitution=0.9")

@@ -182,12 +182,15 @@ def cmd_simulate(args) -> int:
     """``marchlab simulate``: step the scene's bodies, render each frame, write a GIF or MP4.
 
     Every output and the budget (frames, physics steps, the frames' memory and rendering)
-    are checked before the first step; the animation and the CSV are written together.
+    are checked before the first step; the animation, the CSV and the saved state
+    (``--save-state``) are written together. ``--load-state`` starts from a saved state, so
+    the frames carry on in simulated time from where that run ended.
     """
+    import physics
     from physics import PhysicsError
     from .animation import FORMATS, gif_bytes, mp4_bytes, mp4_problem
-    from .simulation import frame_plan, physics_settings, simulate_scene
-    refuse_empty_paths(args, "--output", "--csv")
+    from .simulation import build_world, frame_plan, physics_settings, simulate_scene
+    refuse_empty_paths(args, "--output", "--csv", "--save-state", "--load-state")
     output = Path(args.output) if args.output else Path(f"{Path(args.scene).stem}.gif")
     kind = output.suffix.lower()
     if kind not in FORMATS:
@@ -196,7 +199,8 @@ def cmd_simulate(args) -> int:
     if kind == ".mp4" and mp4_problem():
         raise MarchlabError(f"{output}: {mp4_problem()}")
     table = Path(args.csv) if args.csv else None
-    check_outputs(files=[output, table])
+    state = Path(args.save_state) if args.save_state else None
+    check_outputs(files=[output, table, state])
     scene = load_scene(args.scene, args.set)
     if not scene.bodies:
         raise MarchlabError(f"{args.scene}: has no [[bodies]] to simulate")
@@ -217,9 +221,15 @@ def cmd_simulate(args) -> int:
               "of simulated time)", file=sys.stderr)
     start = time.perf_counter()
     try:
+        world = build_world(scene)
+        if args.load_state:
+            try:
+                physics.load_state(world, args.load_state)
+            except PhysicsError as err:
+                raise MarchlabError(f"--load-state {err}") from None
         with progress_bar(plan.steps, unit="step") as progress:
             trajectory = simulate_scene(scene, plan, allow_large=args.allow_large,
-                                        progress=progress)
+                                        progress=progress, world=world)
     except SceneError as err:
         raise err.in_file(args.scene) from None
     except PhysicsError as err:
@@ -231,14 +241,20 @@ def cmd_simulate(args) -> int:
                          else mp4_bytes(images, 1 / plan.frame_seconds))}
     if table is not None:
         payloads[table] = trajectory_csv(trajectory)
+    if state is not None:
+        from physics.state import state_bytes
+        payloads[state] = state_bytes(world)
     write_outputs(payloads)
     seconds = time.perf_counter() - start
-    print(f"wrote {output} ({plan.frames} frames of {width}x{height} from t = 0 to "
-          f"{plan.steps * dt:.6g} s, {plan.steps} steps of dt = {dt:.6g} s, {backend}, "
-          f"{seconds:.2f} s)")
+    print(f"wrote {output} ({plan.frames} frames of {width}x{height} from t = "
+          f"{trajectory.times[0]:.6g} to {trajectory.times[-1]:.6g} s, {plan.steps} steps of "
+          f"dt = {dt:.6g} s, {backend}, {seconds:.2f} s)")
     if table is not None:
         print(f"wrote {table} ({len(trajectory.times)} records of "
               f"{trajectory.positions.shape[1]} bodies)")
+    if state is not None:
+        print(f"wrote {state} (the state at t = {world.time:.6g} s, step {world.steps}; "
+              f"--load-state {state} carries on from there)")
     return 0
 
 

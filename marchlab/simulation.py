@@ -178,7 +178,8 @@ def frame_plan(dt: float, fps: float, seconds: float) -> FramePlan:
 
 def simulate_scene(scene: Scene, plan: FramePlan, dtype=np.float64, *,
                    allow_large: bool = False,
-                   progress: Callable[[int, int], None] | None = None) -> physics.Trajectory:
+                   progress: Callable[[int, int], None] | None = None,
+                   world: physics.World | None = None) -> physics.Trajectory:
     """Step the scene's world and record one state per frame of ``plan`` (frames records).
 
     Parameters
@@ -191,6 +192,9 @@ def simulate_scene(scene: Scene, plan: FramePlan, dtype=np.float64, *,
         Go ahead beyond `marchlab.budget.MAX_BODY_STEPS` (steps x bodies), otherwise refused.
     progress : callable, optional
         Called as ``progress(steps done, plan.steps)`` every `PROGRESS_STEPS` steps.
+    world : physics.World, optional
+        The world to step (say one resumed from a saved state, `physics.load_state`); it is
+        left in its final state. Default: a fresh `build_world(scene, dtype)`.
 
     Raises
     ------
@@ -202,7 +206,7 @@ def simulate_scene(scene: Scene, plan: FramePlan, dtype=np.float64, *,
         If the state stops being finite (values so large that the arithmetic overflows).
     """
     check_physics(plan.steps, len(scene.bodies), allow_large)
-    world = build_world(scene, dtype)
+    world = build_world(scene, dtype) if world is None else world
     done = 0
 
     def step(n: int) -> None:

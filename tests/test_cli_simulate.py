@@ -1,8 +1,8 @@
 """``marchlab simulate``: bodies stepped with a fixed dt, rendered into an animated GIF.
 
-Frames are tiny (32x24) and runs short (0.5 s of simulated time) so the file runs in seconds.
-A user error must end with one stderr line, exit code 2 and no file (not even a half-written
-one) left behind.
+Frames are tiny (32x24) and runs short (0.5 s of simulated time, 2 s at most) so the file runs
+in seconds. A user error must end with one stderr line, exit code 2 and no file (not even a
+half-written one) left behind.
 """
 
 from __future__ import annotations
@@ -125,3 +125,89 @@ def test_the_real_command_refuses_a_scene_without_bodies_in_one_line(tmp_path):
     assert_one_line_error(result.returncode, result.stderr)
     assert result.stderr == "marchlab: error: classroom: has no [[bodies]] to simulate\n"
     assert list(tmp_path.iterdir()) == []
+
+
+# --- --save-state and --load-state: a run stopped and resumed is the same run ---------------
+
+STATE_RUN = ("--fps", "10", "--size", SIZE)       # frames every 0.1 s; 1 s is t = 0 to 0.9 s
+
+
+def csv_lines(path) -> list[str]:
+    return path.read_text().splitlines()
+
+
+def test_a_run_saved_and_resumed_gives_the_csv_rows_of_one_run_to_the_last_digit(tmp_path,
+                                                                                capsys):
+    """1 s saved at its last frame (t = 0.9 s) then 1 s loaded (t = 0.9 to 1.8 s) against one
+    2 s run: the resumed rows, times included, equal the long run's rows from t = 0.9 s on,
+    character for character (tolerance 0)."""
+    state = tmp_path / "s.npz"
+    code, stdout, _ = run_cli(capsys, "simulate", "bounce", "--seconds", "1", *STATE_RUN,
+                              "-o", tmp_path / "a.gif", "--save-state", state)
+    assert code == 0 and f"wrote {state} (the state at t = 0.9 s, step 216;" in stdout
+    code, stdout, _ = run_cli(capsys, "simulate", "bounce", "--seconds", "1", *STATE_RUN,
+                              "-o", tmp_path / "b.gif", "--load-state", state,
+                              "--csv", tmp_path / "b.csv")
+    assert code == 0 and "from t = 0.9 to 1.8 s" in stdout
+    assert run_cli(capsys, "simulate", "bounce", "--seconds", "2", *STATE_RUN,
+                   "-o", tmp_path / "c.gif", "--csv", tmp_path / "c.csv")[0] == 0
+    resumed, straight = csv_lines(tmp_path / "b.csv"), csv_lines(tmp_path / "c.csv")
+    assert resumed[0] == straight[0]                                  # the header
+    assert resumed[1:] == straight[1 + 9 * BODIES: 1 + 19 * BODIES]   # frames 9 to 18
+    assert resumed[1].startswith("0.9,0,") and resumed[-1].startswith(f"1.8,{BODIES - 1},")
+    assert leftovers(tmp_path) == []
+
+
+@pytest.fixture
+def saved_state(tmp_path, capsys):
+    """The state of the bounce scene after 0.5 s (QUICK), saved to tmp_path/s.npz."""
+    state = tmp_path / "s.npz"
+    assert run_cli(capsys, "simulate", "bounce", *QUICK, "-o", tmp_path / "a.gif",
+                   "--save-state", state)[0] == 0
+    (tmp_path / "a.gif").unlink()
+    return state
+
+
+@pytest.mark.parametrize("argv, damage, message", [
+    (("--set", "bodies[3].radius=0.3"), None,
+     "--load-state {state}: radius of body 3 is 0.35 m in the file but 0.3 m in the world"),
+    (("--set", "physics.dt=0.001"), None,
+     "--load-state {state}: dt is 0.004166666666666667 s in the file but 0.001 s"),
+    ((), lambda state: state.write_bytes(state.read_bytes()[:100]),
+     "--load-state {state}: not a physics state file, or a damaged one"),
+    ((), lambda state: state.unlink(), "--load-state {state}: no such state file"),
+], ids=["other_radius", "other_dt", "truncated", "missing"])
+def test_a_state_that_does_not_fit_is_one_line_exit_2_and_writes_nothing(
+        tmp_path, capsys, saved_state, argv, damage, message):
+    if damage:
+        damage(saved_state)
+    before = sorted(tmp_path.iterdir())
+    code, _, stderr = run_cli(capsys, "simulate", "bounce", *QUICK, *argv,
+                              "--load-state", saved_state, "-o", tmp_path / "b.gif",
+                              "--csv", tmp_path / "b.csv", "--save-state", tmp_path / "t.npz")
+    assert_one_line_error(code, stderr)
+    assert message.format(state=saved_state) in stderr, stderr
+    assert sorted(tmp_path.iterdir()) == before                 # no GIF, CSV or state file
+
+
+def test_save_state_naming_a_folder_is_refused_before_the_run(tmp_path, capsys):
+    (tmp_path / "s.npz").mkdir()
+    code, _, stderr = run_cli(capsys, "simulate", "bounce", *QUICK, "-o", tmp_path / "a.gif",
+                              "--save-state", tmp_path / "s.npz")
+    assert_one_line_error(code, stderr)
+    assert "s.npz: is a folder" in stderr
+    assert [p.name for p in tmp_path.iterdir()] == ["s.npz"]
+
+
+def test_a_state_saved_from_the_command_line_loads_into_the_scenes_world(saved_state):
+    """The file is the physics module's own: `physics.load_state` reads it into the world
+    `build_world` makes of the same scene, at the last frame of the run (step 96, t = 0.4 s)."""
+    import physics
+    from marchlab.simulation import build_world
+    from scene_model.scenefile import load_scene
+    world = build_world(load_scene("bounce"))
+    physics.load_state(world, saved_state)
+    assert world.steps == 96 and world.time == 96 * world.dt
+    reference = build_world(load_scene("bounce"))
+    reference.step(96)
+    np.testing.assert_array_equal(world.position, reference.position)
