@@ -4,7 +4,8 @@ The generated functions do what `reference_cpu.scene_sdf.build_scene_sdf` does, 
 and in the same order: transforms move the query point, primitives give a distance,
 operators fold their children left to right, and the object id follows the distance the
 operator chose. Each node's numbers live in the parameter block, so the text depends only on
-the tree's shape.
+the tree's shape. The physics step's colliders are the same code, one object at a time
+(`sdf_functions`).
 """
 
 from __future__ import annotations
@@ -131,7 +132,8 @@ class SdfWriter:
         return f"{function}({', '.join(a.format(**rows) for a in args)})"
 
     def node(self, node: Node, p: str) -> tuple[str, str]:
-        """Emit code for ``node`` at query point ``p``; return (distance variable, id expression)."""
+        """Emit code for ``node`` at query point ``p``; return (distance variable, id
+        expression)."""
         if type(node) in PRIMITIVES:
             object_id = self._next_id
             self._next_id += 1
@@ -191,24 +193,38 @@ def scene_sdf_code(objects, block: ParameterBlock, bounds=None) -> tuple[str, se
                 "real scene_sdf(vec3 p)\n{\n    return MAX_DISTANCE * 2.0;\n}\n\n"
                 "int scene_object_id(vec3 p)\n{\n    return -1;\n}\n\n"
                 + _unculled_march_sdf()), set()
+    source, used, rows = sdf_functions(root, block)
+    if bounds is None:
+        return source + _unculled_march_sdf(), used
+    # The union node of several objects allocated the first (empty) entry of the walk.
+    replay = rows[1:] if len(objects) > 1 else rows
+    culled, culled_used = _culled_march_sdf(objects, block, bounds, replay)
+    return source + culled, used | culled_used
+
+
+def sdf_functions(root: Node, block: ParameterBlock, distance: str = "scene_sdf",
+                  object_id: str = "scene_object_id",
+                  what: str = "the scene") -> tuple[str, set[str], list[int]]:
+    """Source of ``real distance(vec3 p)`` and ``int object_id(vec3 p)`` for the tree
+    ``root``, the library functions they use, and the first parameter row of each node.
+
+    The renderer writes the whole scene's tree as ``scene_sdf`` and ``scene_object_id``; the
+    physics step writes each static object's tree under its own names
+    (gpu_shader/physics_shapes.py). ``what`` is how the first comment names the tree.
+    """
     distances = SdfWriter(block, with_ids=False)
     d, _ = distances.node(root, "p")
     ids = SdfWriter(block, with_ids=True, replay=distances.rows)
-    _, object_id = ids.node(root, "p")
+    _, id_value = ids.node(root, "p")
     body = "".join(f"    {line}\n" for line in distances.lines)
     id_body = "".join(f"    {line}\n" for line in ids.lines)
     source = (
-        "// The distance from p to the nearest surface of the scene.\n"
-        f"real scene_sdf(vec3 p)\n{{\n{body}    return {d};\n}}\n\n"
+        f"// The distance from p to the nearest surface of {what}.\n"
+        f"real {distance}(vec3 p)\n{{\n{body}    return {d};\n}}\n\n"
         "// The object id (depth-first index of the primitive) whose distance the tree\n"
         "// chose at p: the same walk, keeping track of ids.\n"
-        f"int scene_object_id(vec3 p)\n{{\n{id_body}    return {object_id};\n}}\n\n")
-    if bounds is None:
-        return source + _unculled_march_sdf(), distances.used
-    # The union node of several objects allocated the first (empty) entry of the walk.
-    replay = distances.rows[1:] if len(objects) > 1 else distances.rows
-    culled, used = _culled_march_sdf(objects, block, bounds, replay)
-    return source + culled, distances.used | used
+        f"int {object_id}(vec3 p)\n{{\n{id_body}    return {id_value};\n}}\n\n")
+    return source, distances.used, distances.rows
 
 
 def _unculled_march_sdf() -> str:
@@ -234,8 +250,9 @@ def _culled_march_sdf(objects, block: ParameterBlock, bounds, replay) -> tuple[s
         writer.lines = []
         d, _ = writer.node(node, "p")
         if index not in bit:
+            lines = writer.lines + [f"d = op_union(d, {d});"]
             body.append(f"    // object {index} has no bounding sphere: always in\n"
-                        + "".join(f"    {line}\n" for line in writer.lines + [f"d = op_union(d, {d});"]))
+                        + "".join(f"    {line}\n" for line in lines))
             continue
         lines = writer.lines + [f"d = op_union(d, {d});"]
         body.append(f"    if ((objects & {bit[index]}u) != 0u) {{\n"

@@ -72,12 +72,17 @@ def scene_shapes(scene: Scene, settings: PhysicsSettings, dtype=np.float64) -> l
     return shapes
 
 
-def object_shape(node: Node, name: str, scene: Scene, settings: PhysicsSettings,
-                 dtype) -> Shape:
-    """One object as a `Shape`: the renderer's SDF and normal, the materials' coefficients."""
-    sdf = build_scene_sdf([node], dtype)
-    with_ids = build_scene_sdf([node], dtype, with_ids=True)
-    step = NORMAL_STEP[np.dtype(dtype)]
+def shape_objects(scene: Scene) -> list[Node]:
+    """The top-level objects that become shapes (all but the exact planes), in the order of
+    `scene_shapes` and so of ``world.shapes``."""
+    return [node for node in scene.objects if plane_of(node) is None]
+
+
+def primitive_coefficients(node: Node, scene: Scene,
+                           settings: PhysicsSettings) -> tuple[np.ndarray, np.ndarray]:
+    """Restitution and friction (K,) of each primitive of ``node`` in depth-first order (its
+    object ids): its material's, or the [physics] table's plane_restitution and
+    plane_friction where the material gives none."""
     restitution, friction = [], []
     for primitive in primitives([node]):
         material = scene.materials[primitive.material]
@@ -85,7 +90,17 @@ def object_shape(node: Node, name: str, scene: Scene, settings: PhysicsSettings,
                            else material.restitution)
         friction.append(settings.plane_friction if material.friction is None
                         else material.friction)
-    restitution, friction = np.asarray(restitution, dtype), np.asarray(friction, dtype)
+    return np.asarray(restitution), np.asarray(friction)
+
+
+def object_shape(node: Node, name: str, scene: Scene, settings: PhysicsSettings,
+                 dtype) -> Shape:
+    """One object as a `Shape`: the renderer's SDF and normal, the materials' coefficients."""
+    sdf = build_scene_sdf([node], dtype)
+    with_ids = build_scene_sdf([node], dtype, with_ids=True)
+    step = NORMAL_STEP[np.dtype(dtype)]
+    restitution, friction = (np.asarray(values, dtype)
+                             for values in primitive_coefficients(node, scene, settings))
 
     def distance(p):
         return sdf(np.asarray(p, dtype))[0]

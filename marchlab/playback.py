@@ -168,7 +168,7 @@ class Playback:
             # A new stepper: the old one's contact lists (for warm starting) belong to the old run.
             _release(self._stepper)
             try:
-                self._stepper = STEPPERS["gpu"](self.world)
+                self._stepper = STEPPERS["gpu"](self.world, self.scene)
             except PhysicsError as err:
                 raise MarchlabError(f"the gpu backend cannot step this scene: {err}") from None
         else:
@@ -406,5 +406,6 @@ def _release(stepper) -> None:
     if stepper is None:
         return
     with stepper.ctx:
-        for name in ("program", "bodies", "motion", "contacts", "planes", "counters", "events"):
+        for name in ("program", "bodies", "motion", "contacts", "planes", "counters", "events",
+                     "parameters"):
             getattr(stepper, name).release()

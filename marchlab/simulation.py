@@ -27,37 +27,47 @@ from scene_model.errors import MarchlabError, SceneError
 from scene_model.scene import Scene
 
 from .budget import check_physics
-from .colliders import scene_shapes, static_planes
+from .colliders import primitive_coefficients, scene_shapes, shape_objects, static_planes
 
 PROGRESS_STEPS = 64        # physics steps between two progress reports
 
 
-def _cpu_stepper(world: physics.World):
+def _cpu_stepper(world: physics.World, scene: Scene | None = None):
     return world.step
 
 
-def _gpu_stepper(world: physics.World):
+def _gpu_stepper(world: physics.World, scene: Scene | None = None):
     from gpu_shader.physics import GpuStepper       # imported on use: it needs moderngl
-    return GpuStepper(world)
+    if scene is None:                               # no shapes, or GpuStepper refuses
+        return GpuStepper(world)
+    # The shader collides with the renderer's own code for each shape's scene object.
+    settings = physics_settings(scene)
+    nodes = shape_objects(scene)
+    return GpuStepper(world, shape_nodes=nodes,
+                      shape_surfaces=[primitive_coefficients(node, scene, settings)
+                                      for node in nodes])
 
 
 # The implementations of the physics step, by name: the CPU ground truth and the GPU compute
-# shader checked against it. Each is a function of the world returning ``step(n)``, which
-# advances the world n steps and leaves its state readable (the GPU reads it back only then).
+# shader checked against it. Each is a function of the world (and of the scene it was built
+# from, which the GPU needs to write its shapes' code) returning ``step(n)``, which advances
+# the world n steps and leaves its state readable (the GPU reads it back only then).
 STEPPERS = {"cpu": _cpu_stepper, "gpu": _gpu_stepper}
 
 
 def simulate(world: physics.World, seconds: float, record_every: int = 1,
-             backend: str = "cpu") -> physics.Trajectory:
+             backend: str = "cpu", scene: Scene | None = None) -> physics.Trajectory:
     """`physics.simulate` with the step of ``backend``: "cpu" (`physics.World.step`) or "gpu"
     (`gpu_shader.physics.GpuStepper`: float32 worlds with the simultaneous solver only).
+    ``scene``: the scene `build_world` made the world from; the gpu backend needs it for a
+    world with shapes.
 
     Raises
     ------
     PhysicsError
         An unknown backend, or a world the backend cannot step.
     """
-    step = STEPPERS[choice(backend, "backend", list(STEPPERS))](world)
+    step = STEPPERS[choice(backend, "backend", list(STEPPERS))](world, scene)
     return physics.simulate(world, seconds, record_every=record_every, step=step)
 
 

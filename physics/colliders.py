@@ -236,7 +236,7 @@ def first_shape_hit(shape: Shape, start, u, acceleration, radius, duration, touc
     no farther than its last gap from the surface and has not passed it.
     """
     k = len(start)
-    time = np.full(k, np.inf)
+    time = np.full(k, np.inf, start.dtype)
     if k == 0:
         return time
     speed = np.maximum(np.sqrt(dot(u, u)),

@@ -183,7 +183,7 @@ def _shape_times(world, position, velocity, acceleration, remaining, landing, re
     dtype = position.dtype
     touch = 0.5 * world.slop
     skin = SKIN_SLOPS * world.slop
-    times = np.full((n, len(world.shapes)), np.inf)
+    times = np.full((n, len(world.shapes)), np.inf, dtype)
     normals = np.zeros((n, len(world.shapes), 3), dtype)
     end_velocity = velocity + remaining[:, None] * acceleration
     travel = remaining * np.maximum(np.sqrt(dot(velocity, velocity)),

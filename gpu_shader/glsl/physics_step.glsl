@@ -1,18 +1,23 @@
+{# A template: gpu_shader/physics.py fills in the static shapes' code below (Jinja). #}
 // One step of physics.World with the "simultaneous" (Jacobi) solver, as a compute shader.
 //
-// Loaded by gpu_shader/physics.py, which prepends "#version 430" and the #defines MAX_CONTACTS
-// and MAX_ITERATIONS, and runs the stages below as separate dispatches, in this order:
+// Loaded by gpu_shader/physics.py, which prepends "#version 430" and the #defines of the sizes
+// (MAX_CONTACTS, MAX_ITERATIONS, MAX_PLANES) and of the constants of physics/colliders.py,
+// writes the static shapes' SDF code in where marked, and runs the stages below as separate
+// dispatches, in this order:
 //
 //   STAGE_BEGIN                 integrate velocities, find contacts        (World._step 1, 2)
 //   STAGE_COLLIDE_COUNT, _APPLY collision sweep k = 0 .. iterations-1      (_collide_together)
 //   STAGE_WARM_START            last step's resting impulses               (_apply_warm_start)
 //   STAGE_REST                  resting pass k = 0 .. iterations-1         (_rest)
-//   STAGE_POSITIONS             integrate positions, bounce off planes     (World._step 4)
+//   STAGE_POSITIONS             integrate positions, bounce off planes     (World._step 4,
+//                               and shapes                                  bounce_off_statics)
 //   STAGE_FINISH                stop sphere sweeps, push out, bounds       (stop_sphere_sweeps,
 //                                                                           separate_overlaps)
 //
 // One invocation per body, in the gather form: body i walks its own contact list (planes first,
-// then the other spheres by index, the CPU's order) and sums the impulses it receives. A contact
+// then shapes by (shape, slot), then the other spheres by index: the CPU's order,
+// contacts.find_contacts) and sums the impulses it receives. A contact
 // between two spheres is computed twice, once by each, from the same numbers in the same
 // canonical orientation (a = lower index, normal from b to a), so both get the same impulse
 // with opposite signs. Contacts are found by brute force, O(N^2) per step: fine for the few
@@ -21,6 +26,11 @@
 // Jacobi: every pass reads the velocities of slot u_read and writes slot 1 - u_read, so every
 // contact of a pass sees the same velocities. A pass the CPU would not run (its loop stopped
 // early) still copies the velocities through, so the slots stay in step without a read-back.
+//
+// Rounding: every sum and product is written in the CPU's order (dot3, not dot), and the
+// results the continuous test builds from chains of products are `precise`: without it the
+// compiler may regroup a product with a constant, (0.5 t t) A as t (t A) 0.5, and round a
+// step differently from NumPy. With both, llvmpipe's float32 steps equal the CPU's bit for bit.
 
 layout(local_size_x = 64) in;
 
@@ -32,11 +42,14 @@ layout(local_size_x = 64) in;
 #define STAGE_POSITIONS 5
 #define STAGE_FINISH 6
 
+// Event kinds, numbered in the order the CPU records the events of one collision sweep
+// (gpu_shader.physics.EVENT_KINDS).
 #define KIND_SPHERE_PLANE 0
-#define KIND_SPHERE_SPHERE 1
-#define KIND_LEFT_BOUNDS 2
+#define KIND_SPHERE_SHAPE 1
+#define KIND_SPHERE_SPHERE 2
+#define KIND_LEFT_BOUNDS 3
 
-#define CCD_PASSES 3              // bounce_off_planes(passes=3)
+#define CCD_PASSES 3              // bounce_off_statics(passes=3)
 #define SETTLED 1e-9              // physics.solvers.SETTLED (m/s)
 
 // counters[]: colliding contacts per sweep, largest change per resting pass (float bits: a
@@ -64,7 +77,7 @@ struct Body {
     int start_in_world;     // `moving` in World._step: active when the step began
     int colliding;          // contacts of this body colliding in the current sweep
     int contact_count[2];   // length of the contact list of each parity
-    int pad0;
+    int landing_count;      // faces of shapes it is arriving at this step (at the list's end)
     int pad1;
 };
 
@@ -76,10 +89,12 @@ struct Motion {             // SolverBodies row: velocity and spin during the so
 struct Contact {            // one entry of a body's contact list (physics.contacts.Contacts)
     vec4 normal_gap;        // xyz: unit normal from b to a; w: gap (m)
     vec4 tangent_total;     // xyz: accumulated friction impulse on a (N s); w: unused
-    int other;              // the other sphere's index, or -1 - plane for a plane
+    int other;              // the other sphere's index, plane_code(p) or shape_code(q)
+    int slot;               // which of the ball's contacts with that shape (0 for the others)
     float normal_total;     // accumulated normal impulse (N s)
-    float gravity_part;     // h n.g for a plane contact, 0 between spheres (m/s)
-    float pad;
+    float gravity_part;     // h n.g for a contact with the static world, 0 between spheres
+    vec2 coefficients;      // the pair's restitution max(e_a, e_b), friction sqrt(mu_a mu_b)
+    vec2 pad;
 };
 
 struct Plane {
@@ -90,15 +105,15 @@ struct Plane {
     float pad1;
 };
 
-struct Event {              // physics.events.EVENT_DTYPE, plus the stage that ordered it
+struct Event {              // physics.events.EVENT_DTYPE, plus what orders it as on the CPU
     int step;
-    int stage;
+    int stage;              // the collision sweep, 100 + the continuous pass, or 200: bounds
     int kind;
     int body;
-    int other;
+    int other;              // the plane, shape or sphere, -1 for bounds
     float speed;
     float impulse;
-    int pad;
+    int slot;               // Contact.slot
 };
 
 layout(std430, binding = 0) buffer Bodies { Body bodies[]; };
@@ -114,7 +129,8 @@ uniform int u_read;          // velocity slot read by this dispatch (0 or 1)
 uniform int u_list;          // contact-list parity of this step (0 or 1)
 uniform int u_step;          // step number once this step is done (World.steps + 1)
 uniform int u_count;         // N spheres
-uniform int u_planes;        // P planes
+uniform int u_planes;        // planes in the Planes buffer
+uniform int u_shapes;        // static shapes (the code below has one branch for each)
 uniform int u_integrator;    // 0 explicit, 1 semi_implicit, 2 verlet
 uniform int u_event_capacity;
 uniform int u_has_bounds;
@@ -122,10 +138,21 @@ uniform float u_h;           // dt (s)
 uniform float u_weight;      // c of integrators.py: 0, 1 or 1/2
 uniform float u_threshold;   // restitution threshold (m/s)
 uniform float u_slop;        // m
+uniform float u_skin;        // continuous.SKIN_SLOPS slops (m)
 uniform float u_push_out;    // fraction of a deep overlap removed per step
 uniform vec3 u_gravity;      // m/s^2
 uniform vec3 u_low;          // bounds (m)
 uniform vec3 u_high;
+
+// --- the static shapes: the renderer's SDF code for each (generated) ------------------------
+//
+// Written in by gpu_shader/physics_shapes.py for the shapes of this world: for each shape q,
+// shape_distance_q, shape_object_id_q and shape_normal_q from the scene object's tree, as
+// the renderer writes it, then the same by shape index: shape_distance(q, p), shape_normal,
+// shape_surface (restitution, friction), shape_lipschitz and shape_normal_step.
+
+#define real float
+{{ shapes }}
 
 // --- small helpers -------------------------------------------------------------------------
 
@@ -139,15 +166,35 @@ vec3 cross3(vec3 p, vec3 q) {
 
 int list_start(int body, int parity) { return (parity * u_count + body) * MAX_CONTACTS; }
 
-void record_event(int stage, int kind, int body, int other, float speed, float impulse) {
-    uint slot = atomicAdd(counters[COUNT_EVENTS], 1u);
-    if (int(slot) < u_event_capacity) {
-        events[slot] = Event(u_step, stage, kind, body, other, speed, impulse, 0);
+void record_event(int stage, int kind, int body, int other, int slot, float speed,
+                  float impulse) {
+    uint index = atomicAdd(counters[COUNT_EVENTS], 1u);
+    if (int(index) < u_event_capacity) {
+        events[index] = Event(u_step, stage, kind, body, other, speed, impulse, slot);
     }
 }
 
+// Contact.other names what a ball touches: another sphere by its index (>= 0), or a part of
+// the static world by a negative code: plane p, then shape q after the MAX_PLANES planes.
+int plane_code(int p) { return -1 - p; }
+int shape_code(int q) { return -1 - MAX_PLANES - q; }
+bool is_plane(int other) { return other < 0 && other >= -MAX_PLANES; }
+bool is_shape(int other) { return other < -MAX_PLANES; }
+int plane_of(int other) { return -1 - other; }
+int shape_of(int other) { return -1 - MAX_PLANES - other; }
+
+// What a contact event names: its kind and the plane, shape or sphere (contacts.Contacts.kind
+// and .other).
+int event_kind(int other) {
+    return is_plane(other) ? KIND_SPHERE_PLANE
+         : is_shape(other) ? KIND_SPHERE_SHAPE : KIND_SPHERE_SPHERE;
+}
+int event_other(int other) {
+    return is_plane(other) ? plane_of(other) : is_shape(other) ? shape_of(other) : other;
+}
+
 // The bodies of a contact of body i in the CPU's orientation: a is the lower index (or the
-// sphere of a plane contact), b the higher (or -1, the static world).
+// sphere of a contact with the static world), b the higher (or -1, the static world).
 void contact_bodies(int i, int other, out int a, out int b) {
     if (other < 0) { a = i; b = -1; }
     else { a = min(i, other); b = max(i, other); }
@@ -227,23 +274,155 @@ void apply_impulse(int i, int a, vec3 n, vec3 impulse, inout vec3 velocity, inou
     spin += -(self.radius * self.inverse_inertia) * turn;
 }
 
-// Pair coefficients, mixed as Box2D does: max of restitutions, sqrt of the frictions' product.
-vec2 pair_coefficients(int i, int other) {
-    Body self = bodies[i];
-    if (other < 0) {
-        Plane p = planes[-1 - other];
-        return vec2(max(self.restitution, p.restitution), sqrt(self.friction * p.friction));
-    }
+// Pair coefficients, mixed as Box2D does: max of restitutions, sqrt of the frictions' product
+// (contacts.find_contacts). A sphere and the static surface (e, mu) it touches:
+vec2 static_coefficients(int i, float restitution, float friction) {
+    return vec2(max(bodies[i].restitution, restitution), sqrt(bodies[i].friction * friction));
+}
+
+// Two spheres, in the canonical orientation (a the lower index):
+vec2 sphere_coefficients(int i, int other) {
     int a = min(i, other), b = max(i, other);
     return vec2(max(bodies[a].restitution, bodies[b].restitution),
                 sqrt(bodies[a].friction * bodies[b].friction));
 }
 
+// --- static shapes: the functions of physics/colliders.py ------------------------------------
+//
+// A ball of radius r centred at x touches shape q where d(x) - r <= slop, with the normal the
+// SDF's gradient (colliders.py explains the probes for concave corners and the ridges).
+
+// colliders.shape_normals: the unit normal of `shape` at p, FALLBACK_NORMAL (+y) where the
+// gradient vanishes or is not finite.
+vec3 shape_normals(int shape, vec3 p) {
+    vec3 normal = shape_normal(shape, p);
+    float size = dot3(normal, normal);
+    bool finite = !isinf(size) && !isnan(size);
+    return finite && size > 0.5 ? normal : FALLBACK_NORMAL;
+}
+
+// colliders.surface_near: the unit normal of the surface a ball centred at p meets; `distance`
+// comes in as the SDF at p and goes out as that surface's distance. On a ridge (a point as near
+// to two faces as the finite differences can tell, where a ball resting in a corner sits) the
+// gradient blends the faces' normals, and the derivative along it falls below RIDGE; there the
+// normal is taken OFF_RIDGE_STEPS steps away along the fixed direction OFF_RIDGE, where one face
+// is strictly nearest, and the distance is measured along that normal.
+vec3 surface_near(int shape, vec3 p, inout float distance) {
+    float h = shape_normal_step(shape);
+    vec3 normal = shape_normals(shape, p);
+    float slope = (shape_distance(shape, p + h * normal)
+                   - shape_distance(shape, p - h * normal)) / (2.0 * h);
+    if (!(slope >= RIDGE)) {
+        precise vec3 step = (OFF_RIDGE_STEPS * h) * OFF_RIDGE;
+        vec3 off = p + step;
+        normal = shape_normals(shape, off);
+        distance = shape_distance(shape, off) - dot3(normal, step);
+    }
+    return normal;
+}
+
+// Append a contact to the list of length `count` that starts at `start`; false (and the
+// overflow flag raised) when the list is full. The list's last `landing` entries hold the
+// faces of shapes the ball is arriving at (landing_face).
+bool append_contact(int start, inout int count, int landing, Contact contact) {
+    if (count + landing == MAX_CONTACTS) {
+        atomicOr(counters[COUNT_OVERFLOW], 1u);
+        return false;
+    }
+    contacts[start + count] = contact;
+    count++;
+    return true;
+}
+
+// The k-th face of a shape that a ball is arriving at: a contact the solver leaves alone
+// (gap >= 0, approaching), kept for the continuous test, which meets it on its tangent plane
+// normal . x = offset (World._step's `landing`). Stored from the end of the ball's list.
+int landing_face(int start, int k) { return start + MAX_CONTACTS - 1 - k; }
+
+// colliders.shape_contacts for ball i and one shape, with World._step's removal of contacts
+// still arriving: every surface of the shape within reach (slop) of the ball, up to
+// MAX_SHAPE_CONTACTS, appended in slot order. Slot 0 is the nearest surface; each further
+// slot looks from a probe moved along the last normal found just past that surface's reach,
+// where the SDF sees only the other surfaces (the corner of a box's inside has three).
+void shape_contacts(int i, int shape, int start, inout int count, inout int landing) {
+    Body self = bodies[i];
+    vec3 x = self.position.xyz;
+    float r = self.radius, reach = u_slop;
+    float distance_here = shape_distance(shape, x);
+    if (!(distance_here - r <= reach)) return;
+    vec3 offset = vec3(0.0);
+    vec3 seen[MAX_SHAPE_CONTACTS];                  // the normals found so far
+    for (int slot = 0; slot < MAX_SHAPE_CONTACTS; slot++) {
+        vec3 probe = x + offset;
+        if (slot > 0) distance_here = shape_distance(shape, probe);
+        vec3 m = surface_near(shape, probe, distance_here);
+        // The surface's distance from the centre, along its own normal (planar estimate).
+        float gap = distance_here - dot3(offset, m) - r;
+        bool new_surface = gap <= reach;
+        for (int k = 0; k < slot; k++) {
+            new_surface = new_surface && dot3(m, seen[k]) < SAME_SURFACE;
+        }
+        if (!new_surface) return;
+        // The coefficients of the material at the contact point, on the surface below the ball.
+        vec2 surface = shape_surface(shape, probe - (gap + r) * m);
+        float approach = -dot3(m, self.velocity.xyz);
+        bool arriving = gap >= 0.0 && approach > u_threshold;   // left to bounce_off_statics
+        Contact contact = Contact(vec4(m, gap), vec4(0.0), shape_code(shape), slot, 0.0,
+                                  u_h * dot3(m, u_gravity),
+                                  static_coefficients(i, surface.x, surface.y), vec2(0.0));
+        if (arriving) {
+            // its tangent plane, n . x = offset, for the continuous test
+            contact.normal_gap.w = dot3(m, x) - gap - r;
+            if (count + landing == MAX_CONTACTS) {
+                atomicOr(counters[COUNT_OVERFLOW], 1u);
+                return;
+            }
+            contacts[landing_face(start, landing)] = contact;
+            landing++;
+        } else if (!append_contact(start, count, landing, contact)) {
+            return;
+        }
+        // Move the probe past this surface's reach and look again from there: farther than a
+        // ridge's normal is looked for (surface_near), so that look cannot find it again.
+        float h = shape_normal_step(shape);
+        float shift = r + 2.0 * reach + 2.0 * OFF_RIDGE_STEPS * h - distance_here;
+        offset = offset + max(shift, 0.0) * m;
+        seen[slot] = m;
+    }
+}
+
+// colliders.parabola: the point x0 + t u + t^2 A / 2 of a ball's path over the step.
+vec3 parabola(vec3 start, vec3 u, vec3 acceleration, float t) {
+    precise vec3 p = start + t * u + (0.5 * t * t) * acceleration;
+    return p;
+}
+
+// colliders.first_shape_hit: the first time in [0, duration] at which the ball on its parabola
+// comes within `touch` of the shape, by conservative advancement; -1 if it does not. Its speed
+// is at most V = max(|u|, |u + A duration|), so in the time gap / (L V) it cannot reach the
+// surface: stepping by that never passes through a wall, however thin. A path that has not
+// converged after MAX_ADVANCE steps (grazing the surface) counts as touching where it got to.
+float first_shape_hit(int shape, vec3 start, vec3 u, vec3 acceleration, float radius,
+                      float duration, float touch) {
+    vec3 end = u + duration * acceleration;
+    float speed = max(sqrt(dot3(u, u)), sqrt(dot3(end, end)));
+    if (!(speed > 0.0)) return -1.0;
+    float t = 0.0;
+    for (int attempt = 0; attempt < MAX_ADVANCE; attempt++) {
+        float gap = shape_distance(shape, parabola(start, u, acceleration, t)) - radius;
+        if (gap <= touch || attempt == MAX_ADVANCE - 1) return t;
+        float later = t + max(gap, 0.0) / (shape_lipschitz(shape) * speed);
+        if (!(later <= duration)) return -1.0;
+        t = later;
+    }
+    return -1.0;
+}
+
 // --- stages --------------------------------------------------------------------------------
 
 // integrators.integrate_velocities and contacts.find_contacts (with World._step's removal of
-// plane contacts still arriving: the continuous test bounces those). Carries last step's
-// accumulated impulses over to contacts that persist (solvers.warm_start).
+// plane and shape contacts still arriving: the continuous test bounces those). Carries last
+// step's accumulated impulses over to contacts that persist (solvers.warm_start).
 void begin_step(int i) {
     if (i == 0) {
         for (int c = 0; c <= COUNT_OVERFLOW; c++) {
@@ -260,7 +439,7 @@ void begin_step(int i) {
 
     int start = list_start(i, u_list), old = list_start(i, 1 - u_list);
     int old_count = self.contact_count[1 - u_list];
-    int count = 0;
+    int count = 0, landing = 0;
     if (self.in_world != 0) {
         vec3 x = self.position.xyz;
         for (int p = 0; p < u_planes; p++) {
@@ -269,31 +448,35 @@ void begin_step(int i) {
             float approach = -dot3(n, self.velocity.xyz);
             bool arriving = gap >= 0.0 && approach > u_threshold;
             if (gap <= u_slop && !arriving) {
-                if (count == MAX_CONTACTS) { atomicOr(counters[COUNT_OVERFLOW], 1u); break; }
-                contacts[start + count] = Contact(vec4(n, gap), vec4(0.0), -1 - p, 0.0,
-                                                  u_h * dot3(n, u_gravity), 0.0);
-                count++;
+                Contact contact = Contact(vec4(n, gap), vec4(0.0), plane_code(p), 0, 0.0,
+                                          u_h * dot3(n, u_gravity),
+                                          static_coefficients(i, planes[p].restitution,
+                                                              planes[p].friction), vec2(0.0));
+                if (!append_contact(start, count, landing, contact)) break;
             }
         }
+        for (int q = 0; q < u_shapes; q++) shape_contacts(i, q, start, count, landing);
         for (int j = 0; j < u_count; j++) {
             if (j == i || bodies[j].in_world == 0) continue;
             int a = min(i, j), b = max(i, j);
             vec3 d = bodies[a].position.xyz - bodies[b].position.xyz;
             float distance = sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
             // coincident centres: the fixed fallback normal +y (contacts.FALLBACK_NORMAL)
-            vec3 n = distance == 0.0 ? vec3(0.0, 1.0, 0.0) : d / distance;
+            vec3 n = distance == 0.0 ? FALLBACK_NORMAL : d / distance;
             float gap = distance - (bodies[a].radius + bodies[b].radius);
             if (gap <= u_slop) {
-                if (count == MAX_CONTACTS) { atomicOr(counters[COUNT_OVERFLOW], 1u); break; }
-                contacts[start + count] = Contact(vec4(n, gap), vec4(0.0), j, 0.0, 0.0, 0.0);
-                count++;
+                Contact contact = Contact(vec4(n, gap), vec4(0.0), j, 0, 0.0, 0.0,
+                                          sphere_coefficients(i, j), vec2(0.0));
+                if (!append_contact(start, count, landing, contact)) break;
             }
         }
     }
-    // warm_start: the same pair in last step's list hands over its accumulated impulses
+    // warm_start: the same contact in last step's list (the same pair, or the same plane, or
+    // the same shape and slot: solvers.contact_keys) hands over its accumulated impulses
     for (int c = 0; c < count; c++) {
         for (int o = 0; o < old_count; o++) {
-            if (contacts[old + o].other == contacts[start + c].other) {
+            if (contacts[old + o].other == contacts[start + c].other
+                    && contacts[old + o].slot == contacts[start + c].slot) {
                 contacts[start + c].normal_total = contacts[old + o].normal_total;
                 contacts[start + c].tangent_total = contacts[old + o].tangent_total;
                 break;
@@ -301,6 +484,7 @@ void begin_step(int i) {
         }
     }
     bodies[i].contact_count[u_list] = count;
+    bodies[i].landing_count = landing;
 }
 
 // The first half of solvers._collide_together: how many of this body's contacts collide in
@@ -338,15 +522,15 @@ void collide_apply(int i) {
                 if (k.gravity_part - dot3(v_rel, n) <= u_threshold) continue;
                 float share_b = b < 0 ? 1.0 : float(bodies[b].colliding);
                 vec2 mass = effective_masses(a, b, float(bodies[a].colliding), share_b);
-                vec2 mix = pair_coefficients(i, k.other);
                 float j, approach;
-                vec3 impulse = collision_impulse(v_rel, n, k.gravity_part, mix.x, mix.y, mass,
-                                                 u_threshold, j, approach);
+                vec3 impulse = collision_impulse(v_rel, n, k.gravity_part, k.coefficients.x,
+                                                 k.coefficients.y, mass, u_threshold, j,
+                                                 approach);
                 if (!(j > 0.0)) continue;
                 apply_impulse(i, a, n, impulse, v, w);
                 if (i == a) {
-                    record_event(u_pass, k.other < 0 ? KIND_SPHERE_PLANE : KIND_SPHERE_SPHERE,
-                                 a, k.other < 0 ? -1 - k.other : b, approach, j);
+                    record_event(u_pass, event_kind(k.other), a, event_other(k.other), k.slot,
+                                 approach, j);
                 }
             }
         }
@@ -397,8 +581,8 @@ void rest_pass(int i) {
                 float target = -max(k.normal_gap.w, 0.0) / u_h;     // solvers._resting_target
                 float normal_total = k.normal_total;
                 vec3 tangent_total = k.tangent_total.xyz;
-                vec3 impulse = contact_impulse(v_rel, n, target, pair_coefficients(i, k.other).y,
-                                               mass, normal_total, tangent_total);
+                vec3 impulse = contact_impulse(v_rel, n, target, k.coefficients.y, mass,
+                                               normal_total, tangent_total);
                 contacts[start + c].normal_total = normal_total;
                 contacts[start + c].tangent_total.xyz = tangent_total;
                 apply_impulse(i, a, n, impulse, v, w);
@@ -442,50 +626,153 @@ float first_plane_hit(float gap, float speed, float acceleration, float duration
     return t <= duration ? t : -1.0;
 }
 
-// The positions stage of World._step, then continuous.bounce_off_planes for this body: follow
-// its parabola over the step and bounce off the first plane it would cross (up to 3 times).
+// continuous._plane_times and _shape_times, for body i: the first of the planes and shapes
+// that it would reach in the time left, as an index `wall` (p for plane p, u_planes + q for
+// shape q; -1 for none), the time and, for a shape, the normal of the face met. Ties go to
+// the first.
+//
+// Planes by their exact time of impact (first_plane_hit), skipping those the ball touches
+// (bit p of `skip_planes`). Shapes by conservative advancement to within half the slop
+// (first_shape_hit), tried only where the ball could get there: its gap now no more than the
+// farthest it can travel in the time left. A shape is not skipped because the ball touches
+// it, as a ball rolling on the floor of a box must still meet its wall: the ball is advanced
+// from its path lifted off each face it rests on (its contacts with the shape, and the faces
+// met earlier this step, `met`) by the skin (u_skin), so those faces are out of reach and the
+// others are where they were; the time found is moved back, on the tangent plane of the face
+// found, to when the real path touched it. A face it rests on is not a new impact: velocity
+// Verlet carries the solver's impulse as an acceleration over the step, so the parabola may
+// dip into it before turning. A face the ball was arriving at (landing_face; not those of a
+// shape in `met_shapes`, met already) is met exactly on its tangent plane, as a plane is.
+int first_wall_hit(int i, vec3 position, vec3 velocity, vec3 acceleration, float remaining,
+                   uint skip_planes, uint met_shapes, int met_count, int met_shape[CCD_PASSES],
+                   vec3 met_normal[CCD_PASSES], out float first, out vec3 face) {
+    float radius = bodies[i].radius;
+    int wall = -1;
+    first = 0.0;
+    face = vec3(0.0);
+    for (int p = 0; p < u_planes; p++) {
+        vec3 n = planes[p].normal_offset.xyz;
+        float gap = dot3(position, n) - planes[p].normal_offset.w - radius;
+        if ((skip_planes & (1u << uint(p))) != 0u || gap < 0.0) continue;
+        float t = first_plane_hit(max(gap, 0.0), dot3(velocity, n), dot3(acceleration, n),
+                                  remaining);
+        if (t >= 0.0 && (wall < 0 || t < first)) { wall = p; first = t; }
+    }
+    float touch = 0.5 * u_slop;
+    vec3 end_velocity = velocity + remaining * acceleration;
+    float travel = remaining * max(sqrt(dot3(velocity, velocity)),
+                                   sqrt(dot3(end_velocity, end_velocity)));
+    int start = list_start(i, u_list), count = bodies[i].contact_count[u_list];
+    int landing = bodies[i].landing_count;
+    for (int q = 0; q < u_shapes; q++) {
+        float time = -1.0;
+        vec3 normal = vec3(0.0);
+        vec3 lift = vec3(0.0);                                    // off the `resting` faces
+        for (int c = 0; c < count; c++) {
+            Contact k = contacts[start + c];
+            if (k.other == shape_code(q)) lift += u_skin * k.normal_gap.xyz;
+        }
+        for (int m = 0; m < met_count; m++) {
+            if (met_shape[m] == q) lift += u_skin * met_normal[m];
+        }
+        vec3 lifted = position + lift;
+        float gap = shape_distance(q, lifted) - radius;
+        if (gap <= shape_lipschitz(q) * travel + touch) {
+            time = first_shape_hit(q, lifted, velocity, acceleration, radius, remaining, touch);
+        }
+        if (time >= 0.0) {
+            vec3 p = parabola(lifted, velocity, acceleration, time);
+            vec3 v = velocity + time * acceleration;
+            float depth = shape_distance(q, p);
+            normal = surface_near(q, p, depth);
+            bool again = false;                                   // a `resting` face met again
+            for (int c = 0; c < count; c++) {
+                Contact k = contacts[start + c];
+                if (k.other == shape_code(q) && dot3(normal, k.normal_gap.xyz) > SAME_SURFACE) {
+                    again = true;
+                }
+            }
+            for (int m = 0; m < met_count; m++) {
+                if (met_shape[m] == q && dot3(normal, met_normal[m]) > SAME_SURFACE) again = true;
+            }
+            // gap(t) ~ gap_hit + (t - t_hit) v.n on the tangent plane: back to where it was 0.
+            float gap_hit = depth - dot3(lift, normal) - radius;
+            float closing = dot3(v, normal);
+            if (time >= 0.0 && gap_hit < 0.0 && closing < 0.0) {
+                time = max(time - gap_hit / closing, 0.0);
+            }
+            if (again) time = -1.0;
+        }
+        for (int k = 0; k < landing && (met_shapes & (1u << uint(q))) == 0u; k++) {
+            Contact f = contacts[landing_face(start, k)];
+            if (shape_of(f.other) != q) continue;
+            vec3 n = f.normal_gap.xyz;
+            float face_gap = dot3(position, n) - f.normal_gap.w - radius;
+            float t = first_plane_hit(max(face_gap, 0.0), dot3(velocity, n),
+                                      dot3(acceleration, n), remaining);
+            if (t >= 0.0 && (time < 0.0 || t < time)) { time = t; normal = n; }
+        }
+        if (time >= 0.0 && (wall < 0 || time < first)) {
+            wall = u_planes + q;
+            first = time;
+            face = normal;
+        }
+    }
+    return wall;
+}
+
+// continuous._surface: the (restitution, friction) of the plane or shape `wall` met by a
+// ball centred at `position` (a shape's where the ball's centre is).
+vec2 wall_coefficients(int wall, vec3 position) {
+    if (wall < u_planes) return vec2(planes[wall].restitution, planes[wall].friction);
+    return shape_surface(wall - u_planes, position);
+}
+
+// The positions stage of World._step, then continuous.bounce_off_statics for this body: follow
+// its parabola over the step and bounce off the first plane or shape it would reach (up to 3
+// times).
 void integrate_positions(int i) {
     Body self = bodies[i];
     vec3 x_old = self.start_position.xyz, v_old = self.start_velocity.xyz;
-    vec3 v_new = velocity_of(i), spin = spin_of(i);
-    vec3 x_new = integrate_position(x_old, v_old, v_new);
+    precise vec3 v_new = velocity_of(i), spin = spin_of(i);
+    precise vec3 x_new = integrate_position(x_old, v_old, v_new);
     vec3 turn = integrate_position(vec3(0.0), self.start_spin.xyz, spin);
     bodies[i].orientation = rotate_orientation(self.orientation, turn);
 
-    // Planes the solver already handled this step are skipped (bit p of `skip`).
-    uint skip = 0u;
+    // The planes the ball touches, in the solver's contacts (bit p); the shapes' faces met
+    // during this step (shape, normal) and the shapes met (bit q).
+    uint skip_planes = 0u, met_shapes = 0u;
+    int met_count = 0;
+    int met_shape[CCD_PASSES];
+    vec3 met_normal[CCD_PASSES];
     int start = list_start(i, u_list), count = self.contact_count[u_list];
     for (int c = 0; c < count; c++) {
         int other = contacts[start + c].other;
-        if (other < 0) skip |= 1u << uint(-1 - other);
+        if (is_plane(other)) skip_planes |= 1u << uint(plane_of(other));
     }
-    vec3 acceleration = (v_new - v_old) / u_h;
-    vec3 position = x_old, velocity = v_old + (u_weight - 0.5) * (v_new - v_old);
-    float elapsed = 0.0;
+    precise vec3 acceleration = (v_new - v_old) / u_h;
+    precise vec3 position = x_old, velocity = v_old + (u_weight - 0.5) * (v_new - v_old);
+    precise float elapsed = 0.0;
     bool bounced = false;
     for (int pass = 0; pass < CCD_PASSES && self.start_in_world != 0; pass++) {
-        int plane = -1;
-        float first = 0.0;
-        for (int p = 0; p < u_planes; p++) {
-            vec3 n = planes[p].normal_offset.xyz;
-            float gap = dot3(position, n) - planes[p].normal_offset.w - self.radius;
-            if ((skip & (1u << uint(p))) != 0u || gap < 0.0) continue;
-            float t = first_plane_hit(max(gap, 0.0), dot3(velocity, n), dot3(acceleration, n),
-                                      u_h - elapsed);
-            if (t >= 0.0 && (plane < 0 || t < first)) { plane = p; first = t; }
-        }
-        if (plane < 0) break;
-        float t = first;
+        float t;
+        vec3 face;
+        int wall = first_wall_hit(i, position, velocity, acceleration, u_h - elapsed,
+                                  skip_planes, met_shapes, met_count, met_shape, met_normal,
+                                  t, face);
+        if (wall < 0) break;
+        // Move to the moment of impact, on the parabola.
         position += t * velocity + (0.5 * t * t) * acceleration;
         velocity += t * acceleration;
         elapsed += t;
+        bool plane = wall < u_planes;
+        vec3 n = plane ? planes[wall].normal_offset.xyz : face;
+        vec2 surface = wall_coefficients(wall, position);
         // continuous._impact: a collision impulse, inelastic below the restitution threshold
-        vec3 n = planes[plane].normal_offset.xyz;
         vec3 v_rel = velocity - cross3(self.radius * spin, n);
         float approach = -dot3(v_rel, n);
-        float restitution = approach > u_threshold
-            ? max(self.restitution, planes[plane].restitution) : 0.0;
-        float friction = sqrt(self.friction * planes[plane].friction);
+        float restitution = approach > u_threshold ? max(self.restitution, surface.x) : 0.0;
+        float friction = sqrt(self.friction * surface.y);
         float k_normal = self.inverse_mass + 0.0;
         vec2 k = vec2(k_normal, k_normal + self.radius * self.radius * self.inverse_inertia);
         float j;
@@ -493,19 +780,28 @@ void integrate_positions(int i) {
                                          approach);
         velocity += impulse * self.inverse_mass;
         spin -= (self.radius * self.inverse_inertia) * cross3(n, impulse);
-        record_event(100 + pass, KIND_SPHERE_PLANE, i, plane, approach, j);
-        // Landed: it would fall back through before the step ends, so the plane holds it.
+        record_event(100 + pass, plane ? KIND_SPHERE_PLANE : KIND_SPHERE_SHAPE, i,
+                     plane ? wall : wall - u_planes, 0, approach, j);
+        // Landed: it would fall back through before the step ends, so the surface holds it.
         float left = u_h - elapsed;
         float u_n = dot3(velocity, n), a_n = dot3(acceleration, n);
-        if (u_n * left + 0.5 * a_n * left * left <= 0.0) {
+        precise float fall = u_n * left + 0.5 * a_n * left * left;
+        if (fall <= 0.0) {
             velocity -= u_n * n;
             acceleration -= min(a_n, 0.0) * n;
         }
-        skip |= 1u << uint(plane);
+        if (plane) {
+            skip_planes |= 1u << uint(wall);                  // the ball now touches it ...
+        } else {                                              // ... or rests on this face
+            met_shape[met_count] = wall - u_planes;
+            met_normal[met_count] = n;
+            met_count++;
+            met_shapes |= 1u << uint(wall - u_planes);        // ... and has landed on its faces
+        }
         bounced = true;
     }
     if (bounced) {
-        float left = u_h - elapsed;
+        precise float left = u_h - elapsed;
         x_new = position + left * velocity + (0.5 * left * left) * acceleration;
         vec3 end_velocity = velocity + left * acceleration;
         v_new = end_velocity - ((u_weight - 0.5) * u_h) * acceleration;
@@ -565,7 +861,7 @@ void finish_step(int i) {
     bool outside = any(lessThan(end, u_low)) || any(greaterThan(end, u_high));
     if (u_has_bounds != 0 && self.in_world != 0 && outside) {
         vec3 v = bodies[i].velocity.xyz;
-        record_event(200, KIND_LEFT_BOUNDS, i, -1, sqrt(dot3(v, v)), 0.0);
+        record_event(200, KIND_LEFT_BOUNDS, i, -1, 0, sqrt(dot3(v, v)), 0.0);
         bodies[i].in_world = 0;
         bodies[i].velocity = vec4(0.0);
         bodies[i].spin = vec4(0.0);
