@@ -132,17 +132,18 @@ def test_build_world_takes_missing_body_values_from_the_physics_section(bounce):
     np.testing.assert_array_equal(world.plane_restitution, [settings.plane_restitution])
 
 
-def test_planes_come_from_top_level_plane_objects_moved_by_translate_only():
+def test_exact_planes_come_from_top_level_planes_moved_by_translate_only_the_rest_are_shapes():
     scene = Scene(materials={"default": Material()}, objects=(
         plane(normal=(0, 2, 0), offset=0.5).at(0, 1, 0).at(3, 0.25, 0),   # y = 0.5 + 1.25
         plane(normal=(1, 0, 0), offset=-4),                               # x = -4
-        plane(normal=(0, 0, 1)).rotate(0, 90, 0),                         # rotated: drawn only
-        plane() | sphere(1),                                              # in CSG: drawn only
-        sphere(1).at(0, 5, 0)))
+        plane(normal=(0, 0, 1)).rotate(0, 90, 0),                         # rotated: a shape
+        plane() | sphere(1),                                              # in CSG: a shape
+        sphere(1).at(0, 5, 0)))                                           # a shape
     assert static_planes(scene) == [((0.0, 1.0, 0.0), 1.75), ((1.0, 0.0, 0.0), -4.0)]
     world = build_world(scene)
     np.testing.assert_array_equal(world.plane_normal, [[0, 1, 0], [1, 0, 0]])
     np.testing.assert_array_equal(world.plane_offset, [1.75, -4.0])
+    assert [shape.name for shape in world.shapes] == ["objects[2]", "objects[3]", "objects[4]"]
 
 
 def test_a_scene_drop_is_the_physics_drop_bit_for_bit():
