@@ -70,12 +70,13 @@ def bounce_off_statics(world, start, u, acceleration, spin, skip, h, landing=Non
         Body-plane pairs already handled by the contact solver (touching at the start).
     h : float
         Step (s).
-    landing : (body (K,), shape (K,), normal (K, 3), offset (K,)), optional
+    landing : tuple of 4 arrays, optional
         Faces of shapes that bodies are arriving at (contacts with a gap >= 0, approaching,
-        which the solver left alone): each is met exactly on its tangent plane
-        ``normal . x = offset``, as a plane would be.
-    resting : (body (C,), shape (C,), normal (C, 3)), optional
-        The solver's contacts with shapes. A shape is not skipped because a ball touches it:
+        which the solver left alone), as (body (K,), shape (K,), unit normals (K, 3),
+        offsets (K,)): each is met exactly on its tangent plane ``n . x = offset``, as a
+        plane would be.
+    resting : tuple of 3 arrays, optional
+        The solver's contacts with shapes, as (body (C,), shape (C,), unit normals (C, 3)). A shape is not skipped because a ball touches it:
         a ball rolling on the floor of a box must still meet its wall. Instead the ball is
         advanced from its path lifted off each face it rests on by a skin of `SKIN_SLOPS`
         slops, so those faces are out of reach and the others are where they were (exactly,
