@@ -12,6 +12,7 @@ material the renderer shows at the contact: its ``restitution`` and ``friction``
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
 
@@ -48,8 +49,11 @@ def plane_of(node: Node) -> tuple[tuple[float, float, float], float] | None:
 
 
 def static_planes(scene: Scene) -> list[tuple[tuple[float, float, float], float]]:
-    """The exact planes the bodies collide with: every top-level `plane_of`."""
-    return [plane for plane in map(plane_of, scene.objects) if plane is not None]
+    """The exact planes the bodies collide with: every top-level `plane_of` that no motion
+    moves (a moving plane is a shape)."""
+    moved = {motion.object for motion in scene.motions}
+    return [plane for index, plane in enumerate(map(plane_of, scene.objects))
+            if plane is not None and index not in moved]
 
 
 def scene_shapes(scene: Scene, settings: PhysicsSettings, dtype=np.float64) -> list[Shape]:
@@ -59,23 +63,32 @@ def scene_shapes(scene: Scene, settings: PhysicsSettings, dtype=np.float64) -> l
     pass into it: a repetition whose copies reach out of their cells (`unsafe_distance`).
     """
     dtype = np.dtype(dtype)
+    motions = {motion.object: motion for motion in scene.motions}
     shapes = []
-    for index, node in enumerate(scene.objects):
-        if plane_of(node) is not None:
-            continue
+    for index in shape_indices(scene):
+        node = scene.objects[index]
         name = f"objects[{index}]"
         problem = unsafe_distance(node)
         if problem is not None:
             warnings.warn(f"{name} ({node.kind}) as a collider: {problem}; balls may pass into "
                           "it", stacklevel=2)
-        shapes.append(object_shape(node, name, scene, settings, dtype))
+        shape = object_shape(node, name, scene, settings, dtype)
+        shapes.append(dataclasses.replace(shape, motion=motions.get(index)))
     return shapes
 
 
+def shape_indices(scene: Scene) -> list[int]:
+    """Indices in ``objects`` of the objects that become shapes, in the order of
+    ``world.shapes``: all but the exact planes that no motion moves."""
+    moved = {motion.object for motion in scene.motions}
+    return [index for index, node in enumerate(scene.objects)
+            if index in moved or plane_of(node) is None]
+
+
 def shape_objects(scene: Scene) -> list[Node]:
-    """The top-level objects that become shapes (all but the exact planes), in the order of
+    """The top-level objects that become shapes (`shape_indices`), in the order of
     `scene_shapes` and so of ``world.shapes``."""
-    return [node for node in scene.objects if plane_of(node) is None]
+    return [scene.objects[index] for index in shape_indices(scene)]
 
 
 def primitive_coefficients(node: Node, scene: Scene,

@@ -310,8 +310,9 @@ class Playback:
         return (1 - self.alpha) * self._previous.astype(np.float64) + self.alpha * current
 
     def scene_now(self, blend: bool = False) -> Scene:
-        """The scene with its bodies where they are now, for a renderer."""
-        return scene_at(self.scene, self.positions(blend))
+        """The scene with its bodies (and kinematic objects) where they are now, for a
+        renderer."""
+        return scene_at(self.scene, self.positions(blend), self.world.time)
 
     def energy(self) -> float:
         """Kinetic (with rotational) plus potential energy -sum m g.x of the bodies still in

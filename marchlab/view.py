@@ -491,7 +491,7 @@ class Viewer:
         them (what the probe and the reference check look at)."""
         scene = self.scene
         if self.playback is not None:
-            scene = scene_at(scene, self.playback.positions())
+            scene = scene_at(scene, self.playback.positions(), self.playback.world.time)
         return scene
 
     def check_against_reference(self, gpu_frame, background: bool = True):

@@ -46,12 +46,14 @@ factor L (`Shape.lipschitz`, 1 for every exact or bound SDF), the step is gap / 
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
 
 from scene_model.geometry import dot
+from scene_model.motion import Motion, motion_pose, motion_velocity
 
 FALLBACK_NORMAL = (0.0, 1.0, 0.0)   # the normal where the gradient vanishes (as contacts.py)
 MAX_SHAPE_CONTACTS = 3              # contacts per ball and shape: the faces of a box corner
@@ -89,6 +91,11 @@ class Shape:
         distance that may overestimate (continuous collision then steps by d / L).
     normal_step : float
         The finite-difference step of ``normal`` (m); see `surface_near`.
+    motion : scene_model.motion.Motion, optional
+        Moves the shape over time (a kinematic object): `at` gives it where it is.
+    velocity : callable, optional
+        ``velocity(p)`` (N, 3) -> (N, 3): the surface's velocity at points p (m/s), for a
+        shape that `at` put in place; None for a still one.
     """
     name: str
     distance: Callable[[np.ndarray], np.ndarray]
@@ -98,12 +105,45 @@ class Shape:
     surface: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]] | None = None
     lipschitz: float = 1.0
     normal_step: float = 1e-5
+    motion: Motion | None = None
+    velocity: Callable[[np.ndarray], np.ndarray] | None = None
 
     def coefficients(self, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Restitution and friction (N,) of the surface near points p (N, 3)."""
         if self.surface is not None:
             return self.surface(p)
         return np.full(len(p), self.restitution), np.full(len(p), self.friction)
+
+    def surface_velocity(self, p: np.ndarray) -> np.ndarray:
+        """Velocity (N, 3) of the surface at points p (N, 3) (m/s): 0 for a still shape."""
+        if self.velocity is None:
+            return np.zeros_like(p)
+        return np.asarray(self.velocity(p), p.dtype)
+
+    def at(self, t: float) -> "Shape":
+        """The shape where its motion puts it at time ``t`` (s), as a still shape whose
+        ``velocity`` is its surface's then; the shape itself if it does not move.
+
+        With x(t) = R (x - pivot) + pivot + s (scene_model/motion.py), a point p of the
+        world is the point R^T (p - pivot - s) + pivot of the shape as given, and normals
+        turn with R.
+        """
+        if self.motion is None:
+            return self
+        rotation, shift = motion_pose(self.motion, t)
+        pivot = np.asarray(self.motion.pivot, np.float64)
+        motion, still = self.motion, self
+
+        def local(p):
+            return ((p - pivot - shift) @ rotation + pivot).astype(p.dtype)
+
+        return dataclasses.replace(
+            self, motion=None,
+            distance=lambda p: still.distance(local(p)),
+            normal=lambda p: (np.asarray(still.normal(local(p)), np.float64)
+                              @ rotation.T).astype(p.dtype),
+            surface=lambda p: still.coefficients(local(p)),
+            velocity=lambda p: motion_velocity(motion, t, p).astype(p.dtype))
 
 
 def shape_normals(shape: Shape, p: np.ndarray) -> np.ndarray:
@@ -151,6 +191,7 @@ class ShapeContacts:
     gap: np.ndarray
     restitution: np.ndarray
     friction: np.ndarray
+    velocity: np.ndarray
 
 
 def shape_contacts(shape: Shape, position, radius, bodies, reach: float) -> ShapeContacts:
@@ -206,8 +247,10 @@ def shape_contacts(shape: Shape, position, radius, bodies, reach: float) -> Shap
     points = np.concatenate([f[4] for f in found])[order]
     rows, slot = rows[order], slot[order]
     restitution, friction = shape.coefficients(points - (gap + r[rows])[:, None] * normal)
+    touching = x[rows] - (gap + r[rows])[:, None] * normal        # the surface point
     return ShapeContacts(bodies[rows].astype(np.int64), slot, normal, gap,
-                         np.asarray(restitution, dtype), np.asarray(friction, dtype))
+                         np.asarray(restitution, dtype), np.asarray(friction, dtype),
+                         shape.surface_velocity(touching))
 
 
 def parabola(start, u, acceleration, t):

@@ -51,6 +51,9 @@ class Contacts:
     restitution, friction : (K,)
         The pair's coefficients: max(e_a, e_b) and sqrt(mu_a mu_b), as Box2D mixes them
         (box2d v3 src/contact.c, b2MixRestitution and b2MixFriction).
+    surface_velocity : (K, 3)
+        Velocity of b's surface at the contact (m/s): that of a moving shape (a kinematic
+        object), 0 for everything else.
     """
     a: np.ndarray
     b: np.ndarray
@@ -63,6 +66,7 @@ class Contacts:
     radius_b: np.ndarray
     restitution: np.ndarray
     friction: np.ndarray
+    surface_velocity: np.ndarray
 
     def __len__(self) -> int:
         return len(self.a)
@@ -128,7 +132,7 @@ def spread_coincident(existing, new, distance, rng) -> np.ndarray:
             new[row] = new[row] + distance[row] * direction / np.sqrt(direction @ direction)
 
 
-def find_contacts(world, reach: float, counter=None) -> Contacts:
+def find_contacts(world, reach: float, counter=None, shapes=None) -> Contacts:
     """Every contact with gap <= ``reach`` (m) among the active spheres of ``world``.
 
     Plane contacts come first, ordered by (sphere, plane), then shape contacts ordered by
@@ -136,7 +140,8 @@ def find_contacts(world, reach: float, counter=None) -> Contacts:
     only on the state, never on how the pairs were found. Inside a crowd (spheres piled into
     each other far past touching, as when many are spawned at one point) each sphere gets only
     the contacts of its nearest neighbours along a Morton curve, so the work stays bounded
-    (crowds.py). ``counter``: see `broadphase.find_pairs`.
+    (crowds.py). ``counter``: see `broadphase.find_pairs`. ``shapes``: the world's shapes
+    where they are now (`physics.colliders.Shape.at`); default ``world.shapes``.
     """
     n = world.count
     dtype = world.dtype
@@ -147,7 +152,8 @@ def find_contacts(world, reach: float, counter=None) -> Contacts:
     body, plane = np.nonzero(gaps <= reach)             # row-major: sorted by (sphere, plane)
     plane_a = alive[body]
 
-    touching = [shape_contacts(shape, x, r, alive, reach) for shape in world.shapes]
+    shapes = world.shapes if shapes is None else shapes
+    touching = [shape_contacts(shape, x, r, alive, reach) for shape in shapes]
     shape_index = np.concatenate([np.full(len(c.body), q, np.int64)
                                   for q, c in enumerate(touching)] + [np.zeros(0, np.int64)])
     join = lambda name, empty: np.concatenate(  # noqa: E731
@@ -160,6 +166,7 @@ def find_contacts(world, reach: float, counter=None) -> Contacts:
     shape_gap = join("gap", np.zeros(0, dtype))[order]
     shape_e = np.maximum(world.restitution[shape_a], join("restitution", np.zeros(0, dtype))[order])
     shape_mu = np.sqrt(world.friction[shape_a] * join("friction", np.zeros(0, dtype))[order])
+    shape_velocity = join("velocity", np.zeros((0, 3), dtype))[order]
 
     i, j = find_pairs(x[alive], r[alive] + 0.5 * reach, CROWD_WINDOW, counter)
     a, b = alive[i], alive[j]
@@ -187,4 +194,6 @@ def find_contacts(world, reach: float, counter=None) -> Contacts:
         friction=np.concatenate([
             np.sqrt(world.friction[plane_a] * world.plane_friction[plane]), shape_mu,
             np.sqrt(world.friction[a] * world.friction[b])]).astype(dtype, copy=False),
+        surface_velocity=np.concatenate([np.zeros((len(plane_a), 3), dtype), shape_velocity,
+                                         np.zeros((len(a), 3), dtype)]),
     )

@@ -53,7 +53,7 @@ def first_plane_hit(gap, speed, acceleration, duration):
 
 
 def bounce_off_statics(world, start, u, acceleration, spin, skip, h, landing=None,
-                       resting=None, passes=3):
+                       resting=None, shapes=None, passes=3):
     """Follow each body's parabola over the step, bouncing off planes and shapes it would reach.
 
     Parameters
@@ -76,13 +76,18 @@ def bounce_off_statics(world, start, u, acceleration, spin, skip, h, landing=Non
         offsets (K,)): each is met exactly on its tangent plane ``n . x = offset``, as a
         plane would be.
     resting : tuple of 3 arrays, optional
-        The solver's contacts with shapes, as (body (C,), shape (C,), unit normals (C, 3)). A shape is not skipped because a ball touches it:
-        a ball rolling on the floor of a box must still meet its wall. Instead the ball is
+        The solver's contacts with shapes, as (body (C,), shape (C,), unit normals (C, 3)).
+        A shape is not skipped because a ball touches it: a ball rolling on the floor of a
+        box must still meet its wall. Instead the ball is
         advanced from its path lifted off each face it rests on by a skin of `SKIN_SLOPS`
         slops, so those faces are out of reach and the others are where they were (exactly,
         for faces at right angles). A face met that is one of these (velocity Verlet carries
         the solver's impulse as an acceleration over the step, so its parabola may dip into
         the face before turning) is not a new impact.
+    shapes : list of Shape, optional
+        The world's shapes where they are at the start of the step (`Shape.at`; default
+        ``world.shapes``). A moving shape is met there, and gives the ball its surface's
+        velocity: the continuous test does not follow it through the step.
     passes : int
         Most bounces per body per step (a ball driven into a corner meets two or three walls).
 
@@ -109,12 +114,13 @@ def bounce_off_statics(world, start, u, acceleration, spin, skip, h, landing=Non
     landing = (*none, np.zeros(0, dtype)) if landing is None else landing
     resting = none if resting is None else resting
     hits = []
-    if planes + len(world.shapes) == 0:
+    shapes = world.shapes if shapes is None else shapes
+    if planes + len(shapes) == 0:
         passes = 0
     for _ in range(passes):
         remaining = h - elapsed
-        shape_time, face_normal = _shape_times(world, position, velocity, acceleration,
-                                               remaining, landing, resting)
+        shape_time, face_normal = _shape_times(world, shapes, position, velocity,
+                                               acceleration, remaining, landing, resting)
         time = np.concatenate([_plane_times(world, position, velocity, acceleration,
                                             remaining, skip), shape_time], axis=1)
         time = np.where(world.active[:, None], time, np.inf)
@@ -128,17 +134,17 @@ def bounce_off_statics(world, start, u, acceleration, spin, skip, h, landing=Non
         position[body] += t * velocity[body] + (0.5 * t * t) * acceleration[body]
         velocity[body] += t * acceleration[body]
         elapsed[body] += t[:, 0]
-        n_s, e_s, mu_s = _surface(world, static, position[body])
+        n_s, e_s, mu_s, v_s = _surface(world, shapes, static, position[body])
         # A shape's face has the normal found where it was met (the gradient at the centre
         # gives the nearest face, which may be another one the ball already touches).
         on_shape = static >= planes
         n_s[on_shape] = face_normal[body[on_shape], static[on_shape] - planes]
-        approach, j = _impact(world, body, n_s, e_s, mu_s, velocity, spin)
+        approach, j = _impact(world, body, n_s, e_s, mu_s, v_s, velocity, spin)
         hits.append((body, static, approach, j))
         # If the ball would fall back through the surface before the step ends, it has landed:
         # it keeps no normal velocity and the surface holds it against any acceleration into it.
         left = (h - elapsed[body])
-        u_n = dot(velocity[body], n_s)
+        u_n = dot(velocity[body] - v_s, n_s)              # relative to a moving surface
         a_n = dot(acceleration[body], n_s)
         landed = u_n * left + 0.5 * a_n * left * left <= 0
         velocity[body] -= (landed * u_n)[:, None] * n_s
@@ -146,7 +152,7 @@ def bounce_off_statics(world, start, u, acceleration, spin, skip, h, landing=Non
         bounced[body] = True
         # The ball now touches what it met: a plane is skipped, a shape's face rests.
         skip[body[~on_shape], static[~on_shape]] = True
-        met = np.zeros((n, len(world.shapes)), bool)
+        met = np.zeros((n, len(shapes)), bool)
         met[body[on_shape], static[on_shape] - planes] = True
         keep = ~met[landing[0], landing[1]]
         landing = tuple(part[keep] for part in landing)
@@ -168,7 +174,8 @@ def _plane_times(world, position, velocity, acceleration, remaining, skip):
                     first_plane_hit(np.maximum(gap, 0), speed, accel, remaining[:, None]))
 
 
-def _shape_times(world, position, velocity, acceleration, remaining, landing, resting):
+def _shape_times(world, shapes, position, velocity, acceleration, remaining, landing,
+                 resting):
     """When and where each body first meets each shape in the time left.
 
     Returns (N, Q) times (s; +inf for none) and (N, Q, 3) the unit normals of the faces met.
@@ -184,12 +191,12 @@ def _shape_times(world, position, velocity, acceleration, remaining, landing, re
     dtype = position.dtype
     touch = 0.5 * world.slop
     skin = SKIN_SLOPS * world.slop
-    times = np.full((n, len(world.shapes)), np.inf, dtype)
-    normals = np.zeros((n, len(world.shapes), 3), dtype)
+    times = np.full((n, len(shapes)), np.inf, dtype)
+    normals = np.zeros((n, len(shapes), 3), dtype)
     end_velocity = velocity + remaining[:, None] * acceleration
     travel = remaining * np.maximum(np.sqrt(dot(velocity, velocity)),
                                     np.sqrt(dot(end_velocity, end_velocity)))
-    for q, shape in enumerate(world.shapes):
+    for q, shape in enumerate(shapes):
         mine = resting[1] == q
         lift = np.zeros((n, 3), dtype)
         np.add.at(lift, resting[0][mine], skin * resting[2][mine])
@@ -227,28 +234,31 @@ def _shape_times(world, position, velocity, acceleration, remaining, landing, re
     return times, normals
 
 
-def _surface(world, static, position):
-    """Normal (K, 3), restitution (K,) and friction (K,) of the static thing each body meets:
-    plane ``static`` < P, else shape ``static`` - P at the body's position (its normal is
-    left 0: `_shape_times` found it)."""
+def _surface(world, shapes, static, position):
+    """Normal (K, 3), restitution (K,), friction (K,) and surface velocity (K, 3) of the
+    static thing each body meets: plane ``static`` < P, else shape ``static`` - P at the
+    body's position (its normal is left 0: `_shape_times` found it)."""
     planes = len(world.plane_offset)
     k = len(static)
     normal = np.zeros((k, 3), position.dtype)
     restitution = np.zeros(k, position.dtype)
     friction = np.zeros(k, position.dtype)
+    velocity = np.zeros((k, 3), position.dtype)
     plane = static < planes
     normal[plane] = world.plane_normal[static[plane]]
     restitution[plane] = world.plane_restitution[static[plane]]
     friction[plane] = world.plane_friction[static[plane]]
     for q in np.unique(static[~plane] - planes):
         rows = np.flatnonzero(static == planes + q)
-        restitution[rows], friction[rows] = world.shapes[q].coefficients(position[rows])
-    return normal, restitution, friction
+        restitution[rows], friction[rows] = shapes[q].coefficients(position[rows])
+        velocity[rows] = shapes[q].surface_velocity(position[rows])
+    return normal, restitution, friction, velocity
 
 
-def _impact(world, body, normal, restitution, friction, velocity, spin):
+def _impact(world, body, normal, restitution, friction, surface, velocity, spin):
     """Apply the collision impulse of ``body`` against a static surface of unit ``normal``
-    (K, 3) and coefficients ``restitution``, ``friction`` (K,) to velocity and spin (in place).
+    (K, 3), coefficients ``restitution``, ``friction`` (K,) and velocity ``surface`` (K, 3)
+    to velocity and spin (in place).
 
     A contact approaching slower than the restitution threshold still gets an inelastic
     impulse: here the ball is at the wall, so something must stop it going through.
@@ -256,7 +266,7 @@ def _impact(world, body, normal, restitution, friction, velocity, spin):
     static = np.zeros(len(body), velocity.dtype)
     inverse_mass, inverse_inertia = world.inverse_mass[body], world.inverse_inertia[body]
     radius = world.radius[body]
-    v_rel = velocity[body] - cross(radius[:, None] * spin[body], normal)
+    v_rel = velocity[body] - cross(radius[:, None] * spin[body], normal) - surface
     approach = -dot(v_rel, normal)
     restitution = np.maximum(world.restitution[body], restitution)
     restitution = np.where(approach > world.restitution_threshold, restitution, 0)

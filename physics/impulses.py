@@ -50,10 +50,13 @@ def cross(p: np.ndarray, q: np.ndarray) -> np.ndarray:
                      p[:, 0] * q[:, 1] - p[:, 1] * q[:, 0]], axis=1)
 
 
-def relative_velocity(bodies: SolverBodies, a, b, normal, radius_a, radius_b) -> np.ndarray:
-    """v_rel (K, 3) of a's contact point relative to b's (m/s)."""
+def relative_velocity(bodies: SolverBodies, a, b, normal, radius_a, radius_b,
+                      surface=None) -> np.ndarray:
+    """v_rel (K, 3) of a's contact point relative to b's (m/s); ``surface`` (K, 3), the
+    velocity of a moving static surface b (a kinematic object), is b's where given."""
     lever = radius_a[:, None] * bodies.spin[a] + radius_b[:, None] * bodies.spin[b]
-    return bodies.velocity[a] - bodies.velocity[b] - cross(lever, normal)
+    v_rel = bodies.velocity[a] - bodies.velocity[b] - cross(lever, normal)
+    return v_rel if surface is None else v_rel - surface
 
 
 def effective_masses(inverse_mass_a, inverse_mass_b, inverse_inertia_a, inverse_inertia_b,

@@ -255,7 +255,8 @@ def _collide_together(bodies, contacts, gravity_part, threshold):
     """One Jacobi collision sweep: every contact from the same velocities, mass split among the
     contacts that collide. Applied; None if nothing collides."""
     a, b, n = contacts.a, contacts.b, contacts.normal
-    v_rel = relative_velocity(bodies, a, b, n, contacts.radius_a, contacts.radius_b)
+    v_rel = relative_velocity(bodies, a, b, n, contacts.radius_a, contacts.radius_b,
+                              contacts.surface_velocity)
     approach = gravity_part - dot(v_rel, n)
     colliding = np.flatnonzero(approach > threshold)
     if len(colliding) == 0:
@@ -275,7 +276,7 @@ def _collide(bodies, contacts, index, gravity_part, k_normal, k_tangent, thresho
     """Collision impulses for contacts ``index``, applied; None if none of them collides."""
     a, b, n = contacts.a[index], contacts.b[index], contacts.normal[index]
     ra, rb = contacts.radius_a[index], contacts.radius_b[index]
-    v_rel = relative_velocity(bodies, a, b, n, ra, rb)
+    v_rel = relative_velocity(bodies, a, b, n, ra, rb, contacts.surface_velocity[index])
     impulse, j, approach = collision_impulse(
         v_rel, n, gravity_part[index], contacts.restitution[index], contacts.friction[index],
         k_normal[index], k_tangent[index], threshold)
@@ -304,7 +305,7 @@ def _rest(bodies, contacts, index, target, k_normal, k_tangent, normal_total, ta
         return 0.0
     a, b, n = contacts.a[index], contacts.b[index], contacts.normal[index]
     ra, rb = contacts.radius_a[index], contacts.radius_b[index]
-    v_rel = relative_velocity(bodies, a, b, n, ra, rb)
+    v_rel = relative_velocity(bodies, a, b, n, ra, rb, contacts.surface_velocity[index])
     normal_part, tangent_part = normal_total[index], tangent_total[index]
     impulse = contact_impulse(v_rel, n, target[index], contacts.friction[index],
                               k_normal[index], k_tangent[index], normal_part, tangent_part)

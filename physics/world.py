@@ -298,9 +298,12 @@ class World:
         # >= 0) is left to the continuous test below, which finds the moment it reaches the
         # plane: bouncing it here, a little above the plane, would use the wrong speed.
         work = Counter()
-        contacts = find_contacts(self, self.slop, work)
-        approach = -dot(contacts.normal, v_old[contacts.a])
-        arriving = contacts.static & (contacts.gap >= 0) & (
+        shapes = [shape.at(self.time) for shape in self.shapes]   # kinematic ones placed now
+        contacts = find_contacts(self, self.slop, work, shapes)
+        approach = -dot(contacts.normal, v_old[contacts.a] - contacts.surface_velocity)
+        # (Only a still surface: the continuous test does not follow a moving one.)
+        still = ~np.any(contacts.surface_velocity != 0, axis=1)
+        arriving = contacts.static & still & (contacts.gap >= 0) & (
             approach > self.restitution_threshold)
         # An arriving face of a shape is met on its tangent plane (bounce_off_statics).
         landing = contacts.select(arriving & (contacts.shape >= 0))
@@ -339,7 +342,8 @@ class World:
             self, x_old, start_velocity, acceleration, spin, touching, h,
             landing=(landing.a, landing.shape, landing.normal,
                      dot(landing.normal, x_old[landing.a]) - landing.gap - landing.radius_a),
-            resting=(contacts.a[shape], contacts.shape[shape], contacts.normal[shape]))
+            resting=(contacts.a[shape], contacts.shape[shape], contacts.normal[shape]),
+            shapes=shapes)
         x_new[bounced] = end[bounced]
         # ... and leave the velocity the integrator needs to carry on along the new parabola.
         v_new[bounced] = (end_velocity[bounced]

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from typing import ClassVar, Literal
 
 from .bodies import FRICTION, Body, PhysicsSettings, body_sphere
+from .motion import Motion, posed_objects
 from .errors import SceneError
 from .fields import (DIRECTION, POINT, SIZE, Color, Range, Record, Vec3, color_range, number_text,
                      param, unit_interval)
@@ -245,6 +246,8 @@ class Scene(Record):
     physics: PhysicsSettings | None = param(None, "How bodies are simulated; absent: the "
                                                   "defaults of [physics].")
     bodies: tuple[Body, ...] = param((), "Dynamic spheres, simulated and drawn.")
+    motions: tuple[Motion, ...] = param((), "Kinematic objects: objects moved along a "
+                                            "prescribed path, which push the bodies.")
 
     def _repr_html_(self) -> str:
         """A notebook shows a scene as a short summary (its objects as a tree, its lights and
@@ -288,6 +291,15 @@ class Scene(Record):
             if body.material not in self.materials:
                 raise SceneError(f"unknown material {body.material!r} (defined: {known})",
                                  ("bodies", index, "material"))
+        moved = set()
+        for index, motion in enumerate(self.motions):
+            if motion.object >= len(self.objects):
+                raise SceneError(f"there is no objects[{motion.object}] to move (the scene has "
+                                 f"{len(self.objects)} objects)", ("motions", index, "object"))
+            if motion.object in moved:
+                raise SceneError(f"objects[{motion.object}] already has a motion",
+                                 ("motions", index, "object"))
+            moved.add(motion.object)
 
 
 # --- Bodies in the scene ------------------------------------------------------------------
@@ -311,8 +323,10 @@ def scene_objects(scene: Scene, positions=None) -> tuple[Node, ...]:
     return scene.objects + tuple(body_sphere(body, p) for body, p in zip(scene.bodies, positions))
 
 
-def scene_at(scene: Scene, positions) -> Scene:
-    """``scene`` with its bodies moved to ``positions`` ((N, 3), one row per body).
+def scene_at(scene: Scene, positions, time: float | None = None) -> Scene:
+    """``scene`` with its bodies moved to ``positions`` ((N, 3), one row per body) and, at
+    ``time`` (s), its kinematic objects where their motions have them (`motion.posed_objects`;
+    the motions are then done with and dropped, so the result is a still).
 
     Only numbers change, so a generated shader's text (and the GPU's compiled program) is
     the same for every time step.
@@ -321,7 +335,10 @@ def scene_at(scene: Scene, positions) -> Scene:
         raise ValueError(f"expected {len(scene.bodies)} positions, got {len(positions)}")
     bodies = tuple(dataclasses.replace(body, position=tuple(float(c) for c in p))
                    for body, p in zip(scene.bodies, positions))
-    return dataclasses.replace(scene, bodies=bodies)
+    if time is None or not scene.motions:
+        return dataclasses.replace(scene, bodies=bodies)
+    return dataclasses.replace(scene, bodies=bodies, motions=(),
+                               objects=posed_objects(scene.objects, scene.motions, time))
 
 
 def rendered_scene(scene: Scene) -> Scene:

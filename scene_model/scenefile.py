@@ -295,9 +295,9 @@ def scene_to_toml(scene: Scene) -> str:
     doc = tomlkit.document()
     doc.add(tomlkit.comment("marchlab scene (docs/scene-format.md describes every field)"))
     for key in ("description", "camera", "render", "physics", "materials", "lights", "objects",
-                "bodies"):
-        # A scene without bodies is saved without ``bodies = []``, as it was before bodies.
-        if key in data and not (key == "bodies" and not data[key]):
+                "motions", "bodies"):
+        # A scene without bodies or motions is saved without ``bodies = []``, as it was before.
+        if key in data and not (key in ("bodies", "motions") and not data[key]):
             doc.add(key, data[key])
     return tomlkit.dumps(doc)
 
