@@ -1,0 +1,132 @@
+"""The CPU step against Bullet 3 (pybullet) on the same pile of spheres, side by side.
+
+    pip install pybullet          # a benchmark's dependency only, not the toolkit's
+    python benchmarks/bench_pybullet.py [--counts 100 1000 10000] [--seconds 0.25]
+
+Both engines get the same world: spheres of radius 5 cm on a jittered lattice in a box (a
+floor and four walls, as planes), with the same random velocities, restitution 0.5, friction
+0.4, gravity -9.81 m/s^2 and dt = 1/240 s. marchlab steps it with `physics.World.step`
+(float64, each solver), Bullet with `stepSimulation` (its default sequential impulse solver,
+10 iterations, one substep; DIRECT mode, no GUI). After 0.25 s of warm-up (simulated), each
+is timed over ``--seconds`` of simulated time; the table gives microseconds per sphere-step
+and marchlab's time over Bullet's, measured one after the other in one run. Machines are
+shared and noisy: compare the ratios of one run, not absolute times across runs.
+
+Bullet is C++ with one call per step; marchlab is NumPy with a Python loop over the stages of
+a step and, in the sequential solver, over dependency levels. The engines also differ in what
+they compute (Bullet: a single contact point per pair, split impulses, its own restitution
+threshold and sleeping), so the comparison is of speed on the same scene, not of answers.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import sys
+import time
+
+import numpy as np
+
+sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
+
+import physics  # noqa: E402
+from bench_render import cpu_name  # noqa: E402  (the same /proc/cpuinfo reader)
+
+RADIUS = 0.05
+SPACING = 2.2 * RADIUS
+DT = 1 / 240
+WARM_UP = 0.25
+
+
+def pile(count: int, seed: int = 0):
+    """Centres (count, 3), velocities (count, 3) and the box's half-width for ``count``
+    spheres on a jittered lattice just above the floor."""
+    side = int(np.ceil(count ** (1 / 3)))
+    half = side * SPACING / 2 + RADIUS
+    rng = np.random.default_rng(seed)
+    grid = np.stack(np.meshgrid(*[np.arange(side)] * 3, indexing="ij"), -1).reshape(-1, 3)
+    grid = grid[rng.permutation(len(grid))[:count]]
+    centre = (grid - (side - 1) / 2) * SPACING + rng.uniform(-0.2, 0.2, (count, 3)) * RADIUS
+    centre[:, 1] += (side - 1) / 2 * SPACING + 1.5 * RADIUS
+    return centre, rng.normal(0, 1, (count, 3)), half
+
+
+def marchlab_stepper(count: int, solver: str):
+    centre, velocity, half = pile(count)
+    world = physics.World(dt=DT, solver=solver)
+    world.add_plane((0, 1, 0), 0, friction=0.4)
+    for normal in [(1, 0, 0), (-1, 0, 0), (0, 0, 1), (0, 0, -1)]:
+        world.add_plane(normal, -half, friction=0.4)
+    world.add_spheres(centre, velocities=velocity, radius=RADIUS, restitution=0.5,
+                      friction=0.4)
+    return world.step
+
+
+def bullet_stepper(count: int):
+    import pybullet
+    centre, velocity, half = pile(count)
+    client = pybullet.connect(pybullet.DIRECT)
+    pybullet.setGravity(0, -9.81, 0, physicsClientId=client)
+    pybullet.setTimeStep(DT, physicsClientId=client)
+    # Bullet's planes are z-up; the floor and walls are boxes, the same faces as the planes.
+    walls = [((0, -0.5, 0), (half + 1, 0.5, half + 1))]
+    for x, z in [(1, 0), (-1, 0), (0, 1), (0, -1)]:
+        size = (0.5, 5, half + 1) if x else (half + 1, 5, 0.5)
+        walls.append(((x * (half + 0.5), 5, z * (half + 0.5)), size))
+    for position, size in walls:
+        shape = pybullet.createCollisionShape(pybullet.GEOM_BOX, halfExtents=size,
+                                              physicsClientId=client)
+        body = pybullet.createMultiBody(0, shape, basePosition=position,
+                                        physicsClientId=client)
+        pybullet.changeDynamics(body, -1, restitution=0.5, lateralFriction=0.4,
+                                physicsClientId=client)
+    sphere = pybullet.createCollisionShape(pybullet.GEOM_SPHERE, radius=RADIUS,
+                                           physicsClientId=client)
+    mass = 4 / 3 * np.pi * RADIUS ** 3 * 1000
+    for x, v in zip(centre, velocity):
+        body = pybullet.createMultiBody(mass, sphere, basePosition=x.tolist(),
+                                        physicsClientId=client)
+        pybullet.resetBaseVelocity(body, v.tolist(), physicsClientId=client)
+        pybullet.changeDynamics(body, -1, restitution=0.5, lateralFriction=0.4,
+                                physicsClientId=client)
+
+    def step(n: int) -> None:
+        for _ in range(n):
+            pybullet.stepSimulation(physicsClientId=client)
+    return step
+
+
+def seconds_per_step(step, seconds: float) -> float:
+    step(round(WARM_UP / DT))
+    steps = max(1, round(seconds / DT))
+    start = time.perf_counter()
+    step(steps)
+    return (time.perf_counter() - start) / steps
+
+
+def main(argv=None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--counts", type=int, nargs="+", default=[100, 1000, 10000])
+    parser.add_argument("--seconds", type=float, default=0.25)
+    args = parser.parse_args(argv)
+    try:
+        import pybullet  # noqa: F401
+    except ImportError:
+        sys.exit("bench_pybullet: pybullet is not installed (pip install pybullet)")
+    print(f"# {cpu_name()}, Python {platform.python_version()}, NumPy {np.__version__}; "
+          f"{args.seconds} s simulated after {WARM_UP} s of warm-up, dt = 1/240 s")
+    print("| spheres | engine | µs per sphere-step | against Bullet |")
+    print("|---:|---|---:|---:|")
+    for count in args.counts:
+        bullet = seconds_per_step(bullet_stepper(count), args.seconds)
+        print(f"| {count:,} | Bullet 3 (pybullet) | {bullet / count * 1e6:.1f} | 1.00x |",
+              flush=True)
+        for solver in ("simultaneous", "sequential"):
+            ours = seconds_per_step(marchlab_stepper(count, solver), args.seconds)
+            print(f"| {count:,} | marchlab, {solver} | {ours / count * 1e6:.1f} | "
+                  f"{ours / bullet:.2f}x |", flush=True)
+
+
+if __name__ == "__main__":
+    main()
