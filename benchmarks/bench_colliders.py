@@ -19,40 +19,26 @@ import argparse
 import os
 import platform
 import sys
-import time
 
 import numpy as np
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
 
 import physics  # noqa: E402
+from bench_pybullet import RADIUS, pile, seconds_per_step  # noqa: E402  (the same pile)
 from bench_render import cpu_name  # noqa: E402  (the same /proc/cpuinfo reader)
 from marchlab.colliders import object_shape  # noqa: E402
 from scene_model.builder import Material, PhysicsSettings, Scene, box  # noqa: E402
 
-RADIUS = 0.05
-SPACING = 2.2 * RADIUS
 WALL = 0.1                       # half-thickness of the slabs (m)
-
-
-def spheres(world: physics.World, count: int, seed: int = 0) -> float:
-    """Add ``count`` spheres on a jittered lattice; return the half-width of their box."""
-    side = int(np.ceil(count ** (1 / 3)))
-    half = side * SPACING / 2 + RADIUS
-    rng = np.random.default_rng(seed)
-    grid = np.stack(np.meshgrid(*[np.arange(side)] * 3, indexing="ij"), -1).reshape(-1, 3)
-    grid = grid[rng.permutation(len(grid))[:count]]
-    centre = (grid - (side - 1) / 2) * SPACING + rng.uniform(-0.2, 0.2, (count, 3)) * RADIUS
-    centre[:, 1] += (side - 1) / 2 * SPACING + 1.5 * RADIUS
-    world.add_spheres(centre, velocities=rng.normal(0, 1, (count, 3)), radius=RADIUS,
-                      restitution=0.5, friction=0.4)
-    return half
 
 
 def world_with(kind: str, count: int) -> physics.World:
     """The box of ``count`` spheres with the walls of ``kind``."""
     world = physics.World(solver="simultaneous")
-    half = spheres(world, count)
+    centre, velocity, half = pile(count)
+    world.add_spheres(centre, velocities=velocity, radius=RADIUS, restitution=0.5,
+                      friction=0.4)
     height = 2 * half + 1.0
     if kind == "5 planes":
         world.add_plane((0, 1, 0), 0, friction=0.4)
@@ -77,15 +63,6 @@ def world_with(kind: str, count: int) -> physics.World:
 KINDS = ("5 planes", "1 shape (hollow block)", "5 shapes (box slabs)")
 
 
-def time_steps(world: physics.World, seconds: float) -> float:
-    """Seconds of wall time per step, over ``seconds`` of simulated time after a warm-up."""
-    world.step(round(0.25 / world.dt))
-    steps = max(1, round(seconds / world.dt))
-    start = time.perf_counter()
-    world.step(steps)
-    return (time.perf_counter() - start) / steps
-
-
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--counts", type=int, nargs="+", default=[10, 100, 1000])
@@ -98,7 +75,7 @@ def main(argv=None) -> None:
     for count in args.counts:
         base = None
         for kind in KINDS:
-            per_step = time_steps(world_with(kind, count), args.seconds)
+            per_step = seconds_per_step(world_with(kind, count).step, args.seconds)
             base = per_step if base is None else base
             print(f"| {count:,} | {kind} | {per_step / count * 1e6:.1f} | "
                   f"{per_step / base:.2f}x |", flush=True)
