@@ -18,9 +18,14 @@ would fit). The first ``--worst-steps`` steps are timed from the spawn, when the
 "pairs examined" is the broad phase's candidate count summed over those steps (both of its uses
 in a step: contacts and the swept test), "extent" the size of the crowd afterwards.
 
-``--gpu`` adds rows for gpu_shader.physics (the same scene in float32, simultaneous solver,
-brute-force O(N^2) contacts; the default counts there are 100 and 1,000), timed with a
-read-back of the state at the end, as `physics.simulate` would do at a record.
+``--gpu`` adds a table for gpu_shader.physics side by side with the CPU step on the very same
+world (the lattice in float32, simultaneous solver) for ``--gpu-counts`` (default 100, 1,000
+and 10,000 spheres): steps/s of each after the same warm-up, the GPU's timed with a read-back
+of the state at the end, as `physics.simulate` would do at a record. "candidates" is how many
+bodies the GPU's grid walks met per sphere in the last step (contacts and sweep test
+together; every pair would be 2 N). ``--counts`` with no value skips the float64 table:
+
+    python benchmarks/bench_physics.py --counts --gpu
 """
 
 from __future__ import annotations
@@ -111,7 +116,7 @@ def main(argv=None) -> int:
                         help="steps timed from the spawn in the worst cases (default 10)")
     parser.add_argument("--gpu", action="store_true",
                         help="also time the GPU step (gpu_shader.physics) for --gpu-counts")
-    parser.add_argument("--gpu-counts", type=int, nargs="+", default=[100, 1000])
+    parser.add_argument("--gpu-counts", type=int, nargs="+", default=[100, 1000, 10000])
     args = parser.parse_args(argv)
     print(f"`python benchmarks/bench_physics.py {' '.join(sys.argv[1:])}`".replace(" `", "`"))
     print(f"\nSpheres in a box, dt = 1/240 s, float64; {cpu_name()}, "
@@ -158,23 +163,29 @@ def time_worst(counts, steps: int, solvers) -> None:
 
 
 def time_gpu(counts, seconds: float) -> None:
-    """Rows for the GPU step: the same boxes, float32, steps/s including the final read-back."""
+    """Rows for the GPU step beside the CPU step: the same boxes in float32, simultaneous
+    solver, the same warm-up; the GPU's steps/s include the final read-back."""
     from gpu_shader.context import gl_context, renderer_name
     from gpu_shader.physics import GpuStepper
-    print(f"\nGPU step on {renderer_name(gl_context())} (float32, simultaneous, O(N^2) "
-          "contacts):\n")
-    print("| backend | spheres | steps/s | ms/step |")
-    print("| --- | ---: | ---: | ---: |")
+    print(f"\nGPU step on {renderer_name(gl_context())} beside the CPU step, both float32, "
+          "simultaneous solver, the same world:\n")
+    print("| spheres | contacts (last step) | CPU steps/s | GPU steps/s | GPU / CPU | "
+          "GPU ms/step | GPU candidates per sphere |")
+    print("| ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
     for count in counts:
+        world = box_of_spheres(count, "simultaneous").copy(dtype="float32")
+        steps, wall = time_steps(world, seconds)
+        cpu = steps / wall
+        contacts = len(physics.contacts.find_contacts(world, world.slop))
         world = box_of_spheres(count, "simultaneous").copy(dtype="float32")
         stepper = GpuStepper(world)
         stepper(int(round(0.25 / world.dt)))               # the same warm-up as the CPU
-        steps = max(1, int(round(seconds / world.dt)))
         start = time.perf_counter()
         stepper(steps)
         wall = time.perf_counter() - start
-        print(f"| gpu | {count:,} | {steps / wall:.1f} | {1e3 * wall / steps:.2f} |",
-              flush=True)
+        print(f"| {count:,} | {contacts:,} | {cpu:.1f} | {steps / wall:.1f} | "
+              f"{steps / wall / cpu:.2f} | {1e3 * wall / steps:.2f} | "
+              f"{stepper.candidates() / count:.1f} |", flush=True)
 
 
 if __name__ == "__main__":

@@ -3,9 +3,12 @@
 ``marchlab.simulation.simulate(world, seconds, backend="gpu")`` steps through a `GpuStepper`:
 the world's state is uploaded once into shader storage buffers (std430), stepped there, and
 read back into the `World` only at the steps a `Trajectory` records. The shader,
-glsl/physics_step.glsl, runs the CPU step's stages as separate dispatches, with the CPU's
-function names::
+glsl/physics_step.glsl, runs the CPU step's stages as separate dispatches (one compiled
+program each), with the CPU's function names::
 
+    grid_count .. _scatter
+                         the broad phase (glsl/physics_grid.glsl): the bodies sorted by
+                         the cell of a uniform grid they are in
     begin_step           integrate_velocities, find_contacts (planes, shape_contacts,
                          spheres), warm_start
     collide_count/apply  each collision sweep of solve_simultaneous (mass split among the
@@ -33,10 +36,18 @@ How it differs from the CPU step, and why:
   division and sqrt need not be correctly rounded, so results agree with CPU float32 to
   rounding, not bit for bit. Worlds in float64 are refused (``world.copy(dtype="float32")``).
 - the "simultaneous" solver only; "sequential" (Gauss-Seidel) has no data-parallel form.
-- contacts and the sphere sweep test are found by brute force over all pairs, O(N^2) per
-  step (one invocation per body gathers from every other body), instead of the CPU's broad
-  phase. Same pairs, different cost: fine for the hundreds of spheres of a lesson.
+- the broad phase is one uniform grid of hashed cells (Teschner et al. 2003), sorted by cell
+  with a counting sort every step, cells as wide as the largest sphere plus the slop: each
+  body looks for the spheres it may touch, or meet on its way, in the cells around it, about
+  O(N). It finds exactly the pairs a loop over every pair finds (``all_pairs=True`` runs that
+  loop; tests compare the two), and each body keeps its contacts in the order the CPU sums
+  them (by the other's index), so the sums are the CPU's. The CPU keeps one grid per size
+  class instead: here a few large spheres among many small ones make the cells, and the
+  walks, larger (correct, slower). The sweep test's walks widen by the farthest any sphere
+  moves in the step, so one very fast sphere makes every walk longer; a walk over more cells
+  than there are bodies (so every walk in a world of a few bodies) loops over all bodies.
 - each body keeps at most MAX_CONTACTS contacts a step (planes first); more raises an error.
+  The CPU's crowd window (physics/crowds.py) is not mirrored: a crowd stops with that error.
 - at most 32 planes and 32 shapes (bit masks of the planes and shapes a body touches).
 - the CPU's shapes may be any Python function; the GPU's are scene nodes the shader generator
   can write (every node of the scene format).
@@ -71,12 +82,14 @@ DRAIN_EVERY = 4          # steps between read-backs of the event buffer (not of 
 GROUP = 64               # local_size_x of the shader
 
 STAGES = dict(begin=0, collide_count=1, collide_apply=2, warm_start=3, rest=4, positions=5,
-              finish=6)
+              finish=6, grid_count=7, grid_scan=8, grid_scan_blocks=9, grid_scatter=10)
 INTEGRATOR_CODES = {"explicit": 0, "semi_implicit": 1, "verlet": 2}
 # The shader's event kinds, in the order the CPU records the events of one collision sweep.
 EVENT_KINDS = np.array(["sphere-plane", "sphere-shape", "sphere-sphere", "left-bounds"])
 COUNT_EVENTS = 2 * MAX_ITERATIONS
 COUNT_OVERFLOW = 2 * MAX_ITERATIONS + 1
+COUNT_CANDIDATES = 2 * MAX_ITERATIONS + 3
+COUNTERS = 2 * MAX_ITERATIONS + 4
 
 # The std430 layouts of the shader's structs, field by field.
 VEC4 = ("<f4", 4)
@@ -87,23 +100,29 @@ BODY_DTYPE = np.dtype([("position", *VEC4), ("velocity", *VEC4), ("spin", *VEC4)
                        ("inverse_inertia", "<f4"), ("restitution", "<f4"), ("friction", "<f4"),
                        ("in_world", "<i4"), ("start_in_world", "<i4"), ("colliding", "<i4"),
                        ("contact_count", "<i4", 2), ("landing_count", "<i4"),
-                       ("pad", "<i4")])
+                       ("grid_rank", "<i4")])
 PLANE_DTYPE = np.dtype([("normal_offset", *VEC4), ("restitution", "<f4"), ("friction", "<f4"),
                         ("pad", "<f4", 2)])
+CONTACT_DTYPE = np.dtype([("normal_gap", *VEC4), ("tangent_total", *VEC4), ("other", "<i4"),
+                          ("slot", "<i4"), ("normal_total", "<f4"), ("gravity_part", "<f4"),
+                          ("coefficients", "<f4", 2), ("pad", "<f4", 2)])
 GPU_EVENT_DTYPE = np.dtype([("step", "<i4"), ("stage", "<i4"), ("kind", "<i4"), ("body", "<i4"),
                             ("other", "<i4"), ("speed", "<f4"), ("impulse", "<f4"),
                             ("slot", "<i4")])
-MOTION_BYTES, CONTACT_BYTES = 32, 64
+MOTION_BYTES, CONTACT_BYTES = 32, CONTACT_DTYPE.itemsize
+STORAGE_BUFFERS = 10     # bindings 0 .. 9 of the shader
 PARAMETERS_BINDING = 0   # the uniform block of the shapes' numbers (physics_shapes.py)
 
 
-def shader_source(shapes: str = "") -> str:
-    """The compute shader's text: glsl/physics_step.glsl after its version, sizes and the
-    constants of physics/colliders.py, with ``shapes`` (`physics_shapes.shape_code`) written in.
+def shader_source(shapes: str = "", stage: str = "begin") -> str:
+    """The compute shader of one stage (a name of STAGES): glsl/physics_step.glsl after its
+    version, sizes, the constants of physics/colliders.py and the STAGE, with ``shapes``
+    (`physics_shapes.shape_code`) written in.
     """
     x, y, z = (GLSL.literal(c) for c in colliders.FALLBACK_NORMAL)
     a, b, c = (GLSL.literal(c) for c in colliders.OFF_RIDGE)
-    head = (f"#version 430\n#define MAX_CONTACTS {MAX_CONTACTS}\n"
+    head = (f"#version 430\n#define STAGE {STAGES[stage]}  // {stage}\n"
+            f"#define MAX_CONTACTS {MAX_CONTACTS}\n"
             f"#define MAX_ITERATIONS {MAX_ITERATIONS}\n#define MAX_PLANES {MAX_PLANES}\n"
             "// physics/colliders.py\n"
             f"#define FALLBACK_NORMAL vec3({x}, {y}, {z})\n"
@@ -135,15 +154,24 @@ class GpuStepper:
         ids of `scene_model.shapes.primitives`), as ``Shape.surface`` gives them on the CPU.
         Without them every primitive of shape q has ``world.shapes[q].restitution`` and
         ``.friction``.
+    all_pairs : bool
+        False (default): spheres look for each other in the grid of glsl/physics_grid.glsl.
+        True: every sphere tests every other, the textbook O(N^2) loop the grid replaces; the
+        same pairs, so the same steps (tests compare the two).
     """
 
-    def __init__(self, world, ctx=None, shape_nodes=None, shape_surfaces=None):
+    def __init__(self, world, ctx=None, shape_nodes=None, shape_surfaces=None,
+                 all_pairs=False):
         check_world(world, shape_nodes)
         self.world = world
         self.ctx = ctx or gl_context()
+        self.all_pairs = bool(all_pairs)
         self.parity = 0
+        self.stepped = False            # whether the contact lists hold a step's contacts
         n = max(world.count, 1)
         self.capacity = max(EVENT_CAPACITY, 256 * n)
+        self.table_size, self.scan_block = grid_sizes(n)
+        self.cell_size = cell_size(world)
         shapes = world_shape_code(world, shape_nodes or [], shape_surfaces)
         with self.ctx:
             limit = self.ctx.info["GL_MAX_UNIFORM_BLOCK_SIZE"]
@@ -151,13 +179,25 @@ class GpuStepper:
                 raise PhysicsError(f"the static shapes need {len(shapes.parameters)} parameter "
                                    f"rows, more than this GPU's uniform block holds "
                                    f"({limit // 16})")
-            self.program = self.ctx.compute_shader(shader_source(shapes.source))
+            storage = self.ctx.info.get("GL_MAX_COMPUTE_SHADER_STORAGE_BLOCKS", STORAGE_BUFFERS)
+            if storage < STORAGE_BUFFERS:
+                raise PhysicsError(f"the gpu physics step needs {STORAGE_BUFFERS} storage "
+                                   f"buffers in a compute shader; this GPU allows {storage}")
+            self.programs = {stage: self.ctx.compute_shader(shader_source(shapes.source, stage))
+                             for stage in STAGES}
             self.bodies = self.ctx.buffer(upload_bodies(world).tobytes())
             self.motion = self.ctx.buffer(reserve=2 * n * MOTION_BYTES)
             self.contacts = self.ctx.buffer(reserve=2 * n * MAX_CONTACTS * CONTACT_BYTES)
             self.planes = self.ctx.buffer(upload_planes(world).tobytes())
-            self.counters = self.ctx.buffer(reserve=4 * (2 * MAX_ITERATIONS + 2))
+            self.counters = self.ctx.buffer(reserve=4 * COUNTERS)
             self.events = self.ctx.buffer(reserve=self.capacity * GPU_EVENT_DTYPE.itemsize)
+            # the grid (glsl/physics_grid.glsl); the counts start empty and the scan empties
+            # them again after reading them, and the last start of each table stays 0
+            blocks = self.table_size // self.scan_block
+            self.cell_counts = self.ctx.buffer(bytes(4 * self.table_size))
+            self.cell_starts = self.ctx.buffer(bytes(4 * (self.table_size + 1)))
+            self.block_starts = self.ctx.buffer(bytes(4 * (blocks + 1)))
+            self.grid_entries = self.ctx.buffer(reserve=16 * n)
             self.parameters = self.ctx.buffer(shapes.parameters.tobytes())
             self._set_constants()         # uniforms are set on the current context
 
@@ -174,6 +214,23 @@ class GpuStepper:
         else:
             self.world.steps += steps
 
+    BUFFERS = ("bodies", "motion", "contacts", "planes", "counters", "events", "cell_counts",
+               "cell_starts", "block_starts", "grid_entries", "parameters")
+
+    def release(self) -> None:
+        """Free the programs and buffers (moderngl does not free them when collected)."""
+        with self.ctx:
+            for program in self.programs.values():
+                program.release()
+            for name in self.BUFFERS:
+                getattr(self, name).release()
+
+    def set_gravity(self, gravity) -> None:
+        """Use ``gravity`` (3,) m/s^2 from the next step on (the world's, changed by a slider).
+        Call it with the stepper's context current (``with stepper.ctx:``)."""
+        for program in self.programs.values():
+            _set_uniform(program, "u_gravity", tuple(map(float, gravity)))
+
     def _set_constants(self) -> None:
         w = self.world
         uniforms = dict(u_count=w.count, u_planes=len(w.plane_offset), u_shapes=len(w.shapes),
@@ -182,28 +239,39 @@ class GpuStepper:
                         u_h=float(np.float32(w.dt)), u_weight=_weight(w.integrator),
                         u_threshold=w.restitution_threshold, u_slop=w.slop,
                         u_skin=float(np.float32(continuous.SKIN_SLOPS * w.slop)),
-                        u_push_out=w.push_out, u_gravity=tuple(map(float, w.gravity)))
+                        u_push_out=w.push_out, u_gravity=tuple(map(float, w.gravity)),
+                        u_max_radius=float(np.max(w.radius, initial=0.0)),
+                        u_cell_size=self.cell_size, u_table_size=self.table_size,
+                        u_scan_block=self.scan_block, u_all_pairs=int(self.all_pairs))
         low, high = w.bounds if w.bounds is not None else ((0.0,) * 3, (0.0,) * 3)
         uniforms.update(u_low=tuple(map(float, low)), u_high=tuple(map(float, high)))
-        for name, value in uniforms.items():
-            self.program[name].value = value
+        for program in self.programs.values():
+            for name, value in uniforms.items():
+                _set_uniform(program, name, value)
 
-    def _dispatch(self, stage: str, read: int = 0, pass_: int = 0) -> None:
-        self.program["u_stage"].value = STAGES[stage]
-        self.program["u_read"].value = read
-        self.program["u_pass"].value = pass_
-        self.program.run((self.world.count + GROUP - 1) // GROUP)
+    def _dispatch(self, stage: str, read: int = 0, pass_: int = 0, invocations=None) -> None:
+        """Run ``stage`` once per body (or for ``invocations``), then wait for its writes."""
+        program = self.programs[stage]
+        for name, value in (("u_read", read), ("u_pass", pass_), ("u_list", self.parity),
+                            ("u_step", self.world.steps + 1)):
+            _set_uniform(program, name, value)
+        count = self.world.count if invocations is None else invocations
+        program.run((count + GROUP - 1) // GROUP)
         self.ctx.memory_barrier()
 
     def _step(self) -> None:
         """One World._step: the dispatches listed in glsl/physics_step.glsl, in order."""
         iterations = self.world.iterations
         for index, buffer in enumerate((self.bodies, self.motion, self.contacts, self.planes,
-                                        self.counters, self.events)):
+                                        self.counters, self.events, self.cell_counts,
+                                        self.cell_starts, self.block_starts,
+                                        self.grid_entries)):
             buffer.bind_to_storage_buffer(index)
         self.parameters.bind_to_uniform_block(PARAMETERS_BINDING)
-        self.program["u_list"].value = self.parity
-        self.program["u_step"].value = self.world.steps + 1
+        self._dispatch("grid_count")              # the broad phase: sort the bodies by cell
+        self._dispatch("grid_scan", invocations=self.table_size // self.scan_block)
+        self._dispatch("grid_scan_blocks", invocations=1)
+        self._dispatch("grid_scatter")
         self._dispatch("begin")
         read = 0                                  # velocity slot holding v*
         for k in range(iterations):               # collision sweeps
@@ -218,6 +286,7 @@ class GpuStepper:
         self._dispatch("positions", read)
         self._dispatch("finish")
         self.parity ^= 1
+        self.stepped = True
         self.world.steps += 1
 
     def _drain_events(self) -> None:
@@ -249,6 +318,35 @@ class GpuStepper:
         w.active = state["in_world"] != 0
         w._resting_impulses = None     # kept on the GPU only (see the module docstring)
 
+    def candidates(self) -> int:
+        """How many bodies the last step's walks met: the candidates its contact and sweep
+        tests looked at, summed over the bodies (2 N^2 with ``all_pairs``). A read-back."""
+        with self.ctx:
+            return int(np.frombuffer(self.counters.read(), "<u4")[COUNT_CANDIDATES])
+
+    def contact_lists(self) -> list[np.ndarray]:
+        """The other spheres in each body's contact list of the last step, in list order.
+
+        Returns
+        -------
+        list of N int ndarrays
+            For body i, the indices j of the spheres it touched (gap <= slop) at the positions
+            the last step started from, in the order its impulses are summed: those of higher
+            index (where i is a), then those of lower index (where i is b), each by index, as
+            np.add.at adds `physics.contacts.find_contacts`' pairs. Planes and shapes (which
+            come first) are left out. For tests and lessons: a read-back.
+        """
+        n = self.world.count
+        if n == 0 or not self.stepped:
+            return [np.zeros(0, np.int64) for _ in range(n)]
+        parity = self.parity ^ 1                  # the list the last step wrote
+        with self.ctx:
+            counts = np.frombuffer(self.bodies.read(), BODY_DTYPE)["contact_count"][:n, parity]
+            lists = np.frombuffer(self.contacts.read(), CONTACT_DTYPE)
+        others = lists["other"].reshape(2, n, MAX_CONTACTS)[parity]
+        return [row[:count][row[:count] >= 0].astype(np.int64)
+                for row, count in zip(others, counts)]
+
 
 def check_world(world, shape_nodes=None) -> None:
     """Raise PhysicsError, in one line, for a world the GPU step cannot run (with the scene
@@ -270,6 +368,28 @@ def check_world(world, shape_nodes=None) -> None:
                            "give GpuStepper shape_nodes")
     if shape_nodes is not None and len(shape_nodes) != len(world.shapes):
         raise PhysicsError(f"{len(shape_nodes)} shape nodes for {len(world.shapes)} shapes")
+    moving = [shape.name for shape in world.shapes if shape.motion is not None]
+    if moving:
+        raise PhysicsError(f"the gpu backend does not move kinematic objects ({moving[0]} has "
+                           "a motion): use the cpu backend")
+
+
+def grid_sizes(count: int) -> tuple[int, int]:
+    """(slots of the grid's hash table, slots per block of its scan) for ``count`` bodies.
+
+    The table is the smallest power of two with at least two slots per body, so that few cells
+    share a slot; a block is its square root (rounded up to a power of two), so that each
+    invocation of the scan and the one that adds up the blocks do about as much work.
+    """
+    log2_table = max(1, (2 * count - 1).bit_length())
+    return 1 << log2_table, 1 << ((log2_table + 1) // 2)
+
+
+def cell_size(world) -> float:
+    """The side of a grid cell (m): the diameter of the largest sphere plus the slop, as the
+    CPU's grid (2 max(r + slop / 2)), in float32."""
+    size = float(np.float32(2 * np.max(world.radius, initial=0.0) + world.slop))
+    return size if size > 0 else 1.0
 
 
 def world_shape_code(world, nodes, surfaces=None):
@@ -328,6 +448,13 @@ def cpu_events(raw: np.ndarray, dt: float) -> np.ndarray:
     for name in ("body", "other", "speed", "impulse"):
         events[name] = raw[name]
     return events
+
+
+def _set_uniform(program, name: str, value) -> None:
+    """Set a uniform of ``program``, if its stage uses it (the compiler drops the others)."""
+    member = program.get(name, None)
+    if member is not None:
+        member.value = value
 
 
 def _weight(integrator: str) -> float:

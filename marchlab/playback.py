@@ -399,14 +399,10 @@ def _send_state(stepper) -> None:
             state[name] = fresh[name]
         stepper.bodies.write(state.tobytes())
         stepper.planes.write(upload_planes(world).tobytes())
-        stepper.program["u_gravity"].value = tuple(map(float, world.gravity))
+        stepper.set_gravity(world.gravity)
 
 
 def _release(stepper) -> None:
-    """Free a GpuStepper's program and buffers (moderngl does not free them when collected)."""
-    if stepper is None:
-        return
-    with stepper.ctx:
-        for name in ("program", "bodies", "motion", "contacts", "planes", "counters", "events",
-                     "parameters"):
-            getattr(stepper, name).release()
+    """Free a GpuStepper's programs and buffers (moderngl does not free them when collected)."""
+    if stepper is not None:
+        stepper.release()

@@ -2,10 +2,14 @@
 // One step of physics.World with the "simultaneous" (Jacobi) solver, as a compute shader.
 //
 // Loaded by gpu_shader/physics.py, which prepends "#version 430" and the #defines of the sizes
-// (MAX_CONTACTS, MAX_ITERATIONS, MAX_PLANES) and of the constants of physics/colliders.py,
-// writes the static shapes' SDF code in where marked, and runs the stages below as separate
-// dispatches, in this order:
+// (MAX_CONTACTS, MAX_ITERATIONS, MAX_PLANES), of the constants of physics/colliders.py and of
+// the STAGE the program runs, writes the static shapes' SDF code in where marked, and runs the
+// stages below as separate dispatches, in this order. (One program per stage: the compiler
+// then drops the code of the other stages, which makes each dispatch up to several times
+// faster on llvmpipe than one program choosing its stage by a uniform.)
 //
+//   STAGE_GRID_COUNT .. _SCATTER the broad phase: bodies sorted by grid   (physics_grid.glsl)
+//                               cell
 //   STAGE_BEGIN                 integrate velocities, find contacts        (World._step 1, 2)
 //   STAGE_COLLIDE_COUNT, _APPLY collision sweep k = 0 .. iterations-1      (_collide_together)
 //   STAGE_WARM_START            last step's resting impulses               (_apply_warm_start)
@@ -15,13 +19,16 @@
 //   STAGE_FINISH                stop sphere sweeps, push out, bounds       (stop_sphere_sweeps,
 //                                                                           separate_overlaps)
 //
-// One invocation per body, in the gather form: body i walks its own contact list (planes first,
-// then shapes by (shape, slot), then the other spheres by index: the CPU's order,
-// contacts.find_contacts) and sums the impulses it receives. A contact
-// between two spheres is computed twice, once by each, from the same numbers in the same
-// canonical orientation (a = lower index, normal from b to a), so both get the same impulse
-// with opposite signs. Contacts are found by brute force, O(N^2) per step: fine for the few
-// hundred spheres a lesson uses; the CPU uses a broad phase (physics/broadphase.py) instead.
+// One invocation per body, in the gather form: body i walks its own contact list and sums the
+// impulses it receives, in the order np.add.at adds them on the CPU: first the contacts where
+// it is a (planes, then shapes by (shape, slot), then the spheres of higher index, by index:
+// contacts.find_contacts' order), then those where it is b (the spheres of lower index, by
+// index). The list is stored in that order. A contact between two spheres is computed twice,
+// once by each, from the same numbers in the same canonical orientation (a = lower index,
+// normal from b to a), so both get the same impulse with opposite signs. The other spheres a
+// body may touch, or meet on its way, are those of the grid cells near it
+// (physics_grid.glsl), as the CPU's broad phase finds them (physics/broadphase.py): about
+// O(N) per step instead of every pair's O(N^2).
 //
 // Jacobi: every pass reads the velocities of slot u_read and writes slot 1 - u_read, so every
 // contact of a pass sees the same velocities. A pass the CPU would not run (its loop stopped
@@ -41,6 +48,10 @@ layout(local_size_x = 64) in;
 #define STAGE_REST 4
 #define STAGE_POSITIONS 5
 #define STAGE_FINISH 6
+#define STAGE_GRID_COUNT 7
+#define STAGE_GRID_SCAN 8
+#define STAGE_GRID_SCAN_BLOCKS 9
+#define STAGE_GRID_SCATTER 10
 
 // Event kinds, numbered in the order the CPU records the events of one collision sweep
 // (gpu_shader.physics.EVENT_KINDS).
@@ -53,11 +64,15 @@ layout(local_size_x = 64) in;
 #define SETTLED 1e-9              // physics.solvers.SETTLED (m/s)
 
 // counters[]: colliding contacts per sweep, largest change per resting pass (float bits: a
-// non-negative float orders like its bits), events written, contact lists that overflowed.
+// non-negative float orders like its bits), events written, contact lists that overflowed,
+// the farthest any body moves in this step (float bits), the bodies the grid's walks met
+// in this step (GpuStepper.candidates).
 #define COUNT_COLLIDING 0
 #define COUNT_CHANGE MAX_ITERATIONS
 #define COUNT_EVENTS (2 * MAX_ITERATIONS)
 #define COUNT_OVERFLOW (2 * MAX_ITERATIONS + 1)
+#define COUNT_TRAVEL (2 * MAX_ITERATIONS + 2)
+#define COUNT_CANDIDATES (2 * MAX_ITERATIONS + 3)
 
 struct Body {
     vec4 position;          // x_n (m), the state the step starts from and ends in
@@ -78,7 +93,7 @@ struct Body {
     int colliding;          // contacts of this body colliding in the current sweep
     int contact_count[2];   // length of the contact list of each parity
     int landing_count;      // faces of shapes it is arriving at this step (at the list's end)
-    int pad1;
+    int grid_rank;          // its place among the bodies of its grid slot (physics_grid.glsl)
 };
 
 struct Motion {             // SolverBodies row: velocity and spin during the solver
@@ -122,8 +137,13 @@ layout(std430, binding = 2) buffer Contacts { Contact contacts[]; };     // 2 N 
 layout(std430, binding = 3) buffer Planes { Plane planes[]; };
 layout(std430, binding = 4) buffer Counters { uint counters[]; };
 layout(std430, binding = 5) buffer Events { Event events[]; };
+// The grid (physics_grid.glsl): bodies per slot of the hash table, where each slot's bodies
+// start within its block of slots and where each block starts, and the bodies sorted by slot.
+layout(std430, binding = 6) buffer CellCounts { uint cell_count[]; };    // u_table_size
+layout(std430, binding = 7) buffer CellStarts { uint cell_start[]; };    // u_table_size + 1
+layout(std430, binding = 8) buffer BlockStarts { uint block_start[]; };  // blocks + 1
+layout(std430, binding = 9) buffer GridEntries { ivec4 grid_entries[]; }; // N: cell, body
 
-uniform int u_stage;
 uniform int u_pass;          // the sweep or resting pass this dispatch runs
 uniform int u_read;          // velocity slot read by this dispatch (0 or 1)
 uniform int u_list;          // contact-list parity of this step (0 or 1)
@@ -143,6 +163,11 @@ uniform float u_push_out;    // fraction of a deep overlap removed per step
 uniform vec3 u_gravity;      // m/s^2
 uniform vec3 u_low;          // bounds (m)
 uniform vec3 u_high;
+uniform float u_max_radius;  // the largest sphere's radius (m)
+uniform float u_cell_size;   // side of a grid cell (m)
+uniform int u_table_size;    // slots of the grid's hash table, a power of two
+uniform int u_scan_block;    // slots per block of the scan, a power of two
+uniform int u_all_pairs;     // 1: every walk tests every body (the textbook loop)
 
 // --- the static shapes: the renderer's SDF code for each (generated) ------------------------
 //
@@ -165,6 +190,10 @@ vec3 cross3(vec3 p, vec3 q) {
 }
 
 int list_start(int body, int parity) { return (parity * u_count + body) * MAX_CONTACTS; }
+
+// --- the broad phase: which other spheres to test (physics_grid.glsl) ----------------------
+
+{% include "physics_grid.glsl" %}
 
 void record_event(int stage, int kind, int body, int other, int slot, float speed,
                   float impulse) {
@@ -418,6 +447,39 @@ float first_shape_hit(int shape, vec3 start, vec3 u, vec3 acceleration, float ra
     return -1.0;
 }
 
+// The contact of sphere i with sphere j, in the canonical orientation (a = the lower index,
+// normal from b to a, contacts.sphere_sphere_normals); its gap is normal_gap.w (m).
+Contact sphere_contact(int i, int j) {
+    int a = min(i, j), b = max(i, j);
+    vec3 d = bodies[a].position.xyz - bodies[b].position.xyz;
+    float distance = sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
+    // coincident centres: the fixed fallback normal +y (contacts.FALLBACK_NORMAL)
+    vec3 n = distance == 0.0 ? FALLBACK_NORMAL : d / distance;
+    float gap = distance - (bodies[a].radius + bodies[b].radius);
+    return Contact(vec4(n, gap), vec4(0.0), j, 0, 0.0, 0.0, sphere_coefficients(i, j),
+                   vec2(0.0));
+}
+
+// continuous.stop_sphere_sweeps for one pair: whether spheres i and j, moving in straight
+// lines from start_position to end_position, come within touching (having started more than
+// slop apart) while they approach, and when, as a fraction t of the step (t may be >= 1).
+bool sweep_hit(int i, int j, out float t) {
+    int a = min(i, j), b = max(i, j);
+    vec3 sa = bodies[a].start_position.xyz, sb = bodies[b].start_position.xyz;
+    vec3 p = sa - sb;
+    vec3 q = (bodies[a].end_position.xyz - sa) - (bodies[b].end_position.xyz - sb);
+    float reach = bodies[a].radius + bodies[b].radius;
+    // |p + t q|^2 = R^2: the first root, as c / (-b + sqrt(b^2 - a c))
+    float qa = dot3(q, q), qb = dot3(p, q), qc = dot3(p, p) - reach * reach;
+    float discriminant = qb * qb - qa * qc;
+    float denominator = -qb + sqrt(max(discriminant, 0.0));
+    bool separate = sqrt(max(qc + reach * reach, 0.0)) - reach > u_slop;
+    t = 0.0;
+    if (!(separate && qb < 0.0 && discriminant >= 0.0 && denominator > 0.0)) return false;
+    t = qc / denominator;
+    return true;
+}
+
 // --- stages --------------------------------------------------------------------------------
 
 // integrators.integrate_velocities and contacts.find_contacts (with World._step's removal of
@@ -425,9 +487,8 @@ float first_shape_hit(int shape, vec3 start, vec3 u, vec3 acceleration, float ra
 // step's accumulated impulses over to contacts that persist (solvers.warm_start).
 void begin_step(int i) {
     if (i == 0) {
-        for (int c = 0; c <= COUNT_OVERFLOW; c++) {
-            if (c != COUNT_EVENTS && c != COUNT_OVERFLOW) counters[c] = 0u;
-        }
+        for (int c = 0; c < COUNT_EVENTS; c++) counters[c] = 0u;
+        counters[COUNT_TRAVEL] = 0u;
     }
     Body self = bodies[i];
     bodies[i].start_position = self.position;
@@ -456,19 +517,34 @@ void begin_step(int i) {
             }
         }
         for (int q = 0; q < u_shapes; q++) shape_contacts(i, q, start, count, landing);
-        for (int j = 0; j < u_count; j++) {
+        // The spheres within slop, from the grid cells within reach (any sphere is at most
+        // u_max_radius), met in any order and kept sorted by index, as the CPU orders them:
+        // that order fixes the order of the float32 sums over them.
+        int near[MAX_CONTACTS];
+        int found = 0, room = MAX_CONTACTS - count - landing;
+        float reach = GRID_MARGIN * (self.radius + u_max_radius + u_slop);
+        GridWalk walk = grid_walk(x - reach, x + reach);
+        int j;
+        while (next_body(walk, j)) {
             if (j == i || bodies[j].in_world == 0) continue;
-            int a = min(i, j), b = max(i, j);
-            vec3 d = bodies[a].position.xyz - bodies[b].position.xyz;
-            float distance = sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
-            // coincident centres: the fixed fallback normal +y (contacts.FALLBACK_NORMAL)
-            vec3 n = distance == 0.0 ? FALLBACK_NORMAL : d / distance;
-            float gap = distance - (bodies[a].radius + bodies[b].radius);
-            if (gap <= u_slop) {
-                Contact contact = Contact(vec4(n, gap), vec4(0.0), j, 0, 0.0, 0.0,
-                                          sphere_coefficients(i, j), vec2(0.0));
-                if (!append_contact(start, count, landing, contact)) break;
+            if (!(sphere_contact(i, j).normal_gap.w <= u_slop)) continue;
+            if (found == room) {                                   // the list would overflow
+                atomicOr(counters[COUNT_OVERFLOW], 1u);
+                break;
             }
+            int k = found++;
+            for (; k > 0 && near[k - 1] > j; k--) near[k] = near[k - 1];   // insertion sort
+            near[k] = j;
+        }
+        // Stored in the order of the sums: first where body i is a (the static world came
+        // first; then the spheres of higher index), then where it is b (lower index).
+        int higher = 0;
+        while (higher < found && near[higher] < i) higher++;
+        for (int k = higher; k < found; k++) {
+            append_contact(start, count, landing, sphere_contact(i, near[k]));
+        }
+        for (int k = 0; k < higher; k++) {
+            append_contact(start, count, landing, sphere_contact(i, near[k]));
         }
     }
     // warm_start: the same contact in last step's list (the same pair, or the same plane, or
@@ -505,33 +581,30 @@ void collide_count(int i) {
 }
 
 // The second half (solvers._collide): collision impulses with mass split among the colliding
-// contacts. Body i sums first the contacts where it is a, then those where it is b, the order
-// in which np.add.at adds them on the CPU.
+// contacts. Body i sums them in the order of its list: first the contacts where it is a, then
+// those where it is b, the order in which np.add.at adds them on the CPU.
 void collide_apply(int i) {
     vec3 v = velocity_of(i), w = spin_of(i);
     if (counters[COUNT_COLLIDING + u_pass] != 0u) {
         int start = list_start(i, u_list), count = bodies[i].contact_count[u_list];
-        for (int side = 0; side < 2; side++) {
-            for (int c = 0; c < count; c++) {
-                Contact k = contacts[start + c];
-                int a, b;
-                contact_bodies(i, k.other, a, b);
-                if ((side == 0) != (i == a)) continue;
-                vec3 n = k.normal_gap.xyz;
-                vec3 v_rel = relative_velocity(a, b, n);
-                if (k.gravity_part - dot3(v_rel, n) <= u_threshold) continue;
-                float share_b = b < 0 ? 1.0 : float(bodies[b].colliding);
-                vec2 mass = effective_masses(a, b, float(bodies[a].colliding), share_b);
-                float j, approach;
-                vec3 impulse = collision_impulse(v_rel, n, k.gravity_part, k.coefficients.x,
-                                                 k.coefficients.y, mass, u_threshold, j,
-                                                 approach);
-                if (!(j > 0.0)) continue;
-                apply_impulse(i, a, n, impulse, v, w);
-                if (i == a) {
-                    record_event(u_pass, event_kind(k.other), a, event_other(k.other), k.slot,
-                                 approach, j);
-                }
+        for (int c = 0; c < count; c++) {
+            Contact k = contacts[start + c];
+            int a, b;
+            contact_bodies(i, k.other, a, b);
+            vec3 n = k.normal_gap.xyz;
+            vec3 v_rel = relative_velocity(a, b, n);
+            if (k.gravity_part - dot3(v_rel, n) <= u_threshold) continue;
+            float share_b = b < 0 ? 1.0 : float(bodies[b].colliding);
+            vec2 mass = effective_masses(a, b, float(bodies[a].colliding), share_b);
+            float j, approach;
+            vec3 impulse = collision_impulse(v_rel, n, k.gravity_part, k.coefficients.x,
+                                             k.coefficients.y, mass, u_threshold, j,
+                                             approach);
+            if (!(j > 0.0)) continue;
+            apply_impulse(i, a, n, impulse, v, w);
+            if (i == a) {
+                record_event(u_pass, event_kind(k.other), a, event_other(k.other), k.slot,
+                             approach, j);
             }
         }
     }
@@ -543,17 +616,14 @@ void collide_apply(int i) {
 void warm_start_apply(int i) {
     vec3 v = velocity_of(i), w = spin_of(i);
     int start = list_start(i, u_list), count = bodies[i].contact_count[u_list];
-    for (int side = 0; side < 2; side++) {
-        for (int c = 0; c < count; c++) {
-            Contact k = contacts[start + c];
-            int a, b;
-            contact_bodies(i, k.other, a, b);
-            if ((side == 0) != (i == a)) continue;
-            vec3 n = k.normal_gap.xyz;
-            vec3 tangent = k.tangent_total.xyz - dot3(k.tangent_total.xyz, n) * n;
-            contacts[start + c].tangent_total.xyz = tangent;
-            apply_impulse(i, a, n, k.normal_total * n + tangent, v, w);
-        }
+    for (int c = 0; c < count; c++) {
+        Contact k = contacts[start + c];
+        int a, b;
+        contact_bodies(i, k.other, a, b);
+        vec3 n = k.normal_gap.xyz;
+        vec3 tangent = k.tangent_total.xyz - dot3(k.tangent_total.xyz, n) * n;
+        contacts[start + c].tangent_total.xyz = tangent;
+        apply_impulse(i, a, n, k.normal_total * n + tangent, v, w);
     }
     motion[(1 - u_read) * u_count + i] = Motion(vec4(v, 0.0), vec4(w, 0.0));
 }
@@ -567,27 +637,24 @@ void rest_pass(int i) {
     if (running) {
         int start = list_start(i, u_list), count = bodies[i].contact_count[u_list];
         float change = 0.0;
-        for (int side = 0; side < 2; side++) {
-            for (int c = 0; c < count; c++) {
-                Contact k = contacts[start + c];
-                int a, b;
-                contact_bodies(i, k.other, a, b);
-                if ((side == 0) != (i == a)) continue;
-                vec3 n = k.normal_gap.xyz;
-                vec3 v_rel = relative_velocity(a, b, n);
-                float share_b = b < 0 ? 1.0 : float(bodies[b].contact_count[u_list]);
-                vec2 mass = effective_masses(a, b, float(bodies[a].contact_count[u_list]),
-                                             share_b);
-                float target = -max(k.normal_gap.w, 0.0) / u_h;     // solvers._resting_target
-                float normal_total = k.normal_total;
-                vec3 tangent_total = k.tangent_total.xyz;
-                vec3 impulse = contact_impulse(v_rel, n, target, k.coefficients.y, mass,
-                                               normal_total, tangent_total);
-                contacts[start + c].normal_total = normal_total;
-                contacts[start + c].tangent_total.xyz = tangent_total;
-                apply_impulse(i, a, n, impulse, v, w);
-                change = max(change, sqrt(dot3(impulse, impulse)) * mass.y);
-            }
+        for (int c = 0; c < count; c++) {                 // a's contacts first, then b's
+            Contact k = contacts[start + c];
+            int a, b;
+            contact_bodies(i, k.other, a, b);
+            vec3 n = k.normal_gap.xyz;
+            vec3 v_rel = relative_velocity(a, b, n);
+            float share_b = b < 0 ? 1.0 : float(bodies[b].contact_count[u_list]);
+            vec2 mass = effective_masses(a, b, float(bodies[a].contact_count[u_list]),
+                                         share_b);
+            float target = -max(k.normal_gap.w, 0.0) / u_h;     // solvers._resting_target
+            float normal_total = k.normal_total;
+            vec3 tangent_total = k.tangent_total.xyz;
+            vec3 impulse = contact_impulse(v_rel, n, target, k.coefficients.y, mass,
+                                           normal_total, tangent_total);
+            contacts[start + c].normal_total = normal_total;
+            contacts[start + c].tangent_total.xyz = tangent_total;
+            apply_impulse(i, a, n, impulse, v, w);
+            change = max(change, sqrt(dot3(impulse, impulse)) * mass.y);
         }
         atomicMax(counters[COUNT_CHANGE + u_pass], floatBitsToUint(change));
     }
@@ -807,53 +874,57 @@ void integrate_positions(int i) {
         v_new = end_velocity - ((u_weight - 0.5) * u_h) * acceleration;
     }
     bodies[i].end_position = vec4(x_new, 0.0);
+    // the farthest any ball moves this step, which widens the sweep test's walks (finish_step)
+    vec3 d = x_new - x_old;
+    float travel = sqrt(dot3(d, d));
+    if (self.start_in_world != 0 && finite3(d)) {
+        atomicMax(counters[COUNT_TRAVEL], floatBitsToUint(travel));
+    }
     bodies[i].velocity = vec4(v_new, 0.0);
     bodies[i].spin = vec4(spin, 0.0);
 }
 
-// continuous.stop_sphere_sweeps (every pair, no broad phase), solvers.separate_overlaps and
-// World._remove_out_of_bounds, for body i.
+// continuous.stop_sphere_sweeps, solvers.separate_overlaps and World._remove_out_of_bounds,
+// for body i.
 void finish_step(int i) {
     Body self = bodies[i];
     vec3 start = self.start_position.xyz, end = self.end_position.xyz;
     if (self.start_in_world != 0) {
-        float first = -1.0;
+        // The earliest hit among the spheres of the grid cells that body i's path could
+        // reach: a sphere j it meets at time t started within r_i + r_j + t |d_j| of a point
+        // of that path, so within the largest radius and the farthest travel of any sphere.
+        bool hit = false;
+        float first = 0.0;
         vec3 d_i = end - start;
-        for (int j = 0; j < u_count; j++) {
-            if (j == i || bodies[j].start_in_world == 0) continue;
-            int a = min(i, j), b = max(i, j);
-            vec3 sa = bodies[a].start_position.xyz, sb = bodies[b].start_position.xyz;
-            vec3 p = sa - sb;
-            vec3 q = (bodies[a].end_position.xyz - sa) - (bodies[b].end_position.xyz - sb);
-            float reach = bodies[a].radius + bodies[b].radius;
-            // |p + t q|^2 = R^2: the first root, as c / (-b + sqrt(b^2 - a c))
-            float qa = dot3(q, q), qb = dot3(p, q), qc = dot3(p, p) - reach * reach;
-            float discriminant = qb * qb - qa * qc;
-            float denominator = -qb + sqrt(max(discriminant, 0.0));
-            bool separate = sqrt(max(qc + reach * reach, 0.0)) - reach > u_slop;
-            if (!(separate && qb < 0.0 && discriminant >= 0.0 && denominator > 0.0)) continue;
-            float t = qc / denominator;
-            if (t < 1.0 && (first < 0.0 || t < first)) first = t;
+        float travel = uintBitsToFloat(counters[COUNT_TRAVEL]);
+        float reach = GRID_MARGIN * (self.radius + u_max_radius + u_slop + travel);
+        GridWalk walk = grid_walk(min(start, end) - reach, max(start, end) + reach);
+        int j;
+        while (next_body(walk, j)) {
+            float t;
+            if (j == i || bodies[j].start_in_world == 0 || !sweep_hit(i, j, t)) continue;
+            if (t < 1.0 && (!hit || t < first)) {     // the minimum, whatever the order met
+                hit = true;
+                first = t;
+            }
         }
-        if (first >= 0.0) end = start + first * d_i;
+        if (hit) end = start + first * d_i;
     }
 
     // separate_overlaps: contacts deeper than slop, shared by inverse mass, mean of requests
     vec3 total = vec3(0.0);
     int deep = 0;
     int list = list_start(i, u_list), count = self.contact_count[u_list];
-    for (int side = 0; side < 2; side++) {
-        for (int c = 0; c < count; c++) {
-            Contact k = contacts[list + c];
-            int a, b;
-            contact_bodies(i, k.other, a, b);
-            if ((side == 0) != (i == a) || !(k.normal_gap.w < -u_slop)) continue;
-            float ima = inverse_mass_of(a), imb = inverse_mass_of(b);
-            float depth = u_push_out * (-k.normal_gap.w - u_slop) / (ima + imb);
-            vec3 push = depth * k.normal_gap.xyz;
-            total += i == a ? push * ima : -push * imb;
-            deep++;
-        }
+    for (int c = 0; c < count; c++) {                     // a's contacts first, then b's
+        Contact k = contacts[list + c];
+        int a, b;
+        contact_bodies(i, k.other, a, b);
+        if (!(k.normal_gap.w < -u_slop)) continue;
+        float ima = inverse_mass_of(a), imb = inverse_mass_of(b);
+        float depth = u_push_out * (-k.normal_gap.w - u_slop) / (ima + imb);
+        vec3 push = depth * k.normal_gap.xyz;
+        total += i == a ? push * ima : -push * imb;
+        deep++;
     }
     end += total / float(max(deep, 1));
 
@@ -870,12 +941,22 @@ void finish_step(int i) {
 
 void main() {
     int i = int(gl_GlobalInvocationID.x);
-    if (i >= u_count) return;
-    if (u_stage == STAGE_BEGIN) begin_step(i);
-    else if (u_stage == STAGE_COLLIDE_COUNT) collide_count(i);
-    else if (u_stage == STAGE_COLLIDE_APPLY) collide_apply(i);
-    else if (u_stage == STAGE_WARM_START) warm_start_apply(i);
-    else if (u_stage == STAGE_REST) rest_pass(i);
-    else if (u_stage == STAGE_POSITIONS) integrate_positions(i);
-    else if (u_stage == STAGE_FINISH) finish_step(i);
+    if (STAGE == STAGE_GRID_SCAN) {                      // one invocation per block of slots
+        if (i < u_table_size / u_scan_block) scan_block(i);
+        return;
+    }
+    if (STAGE == STAGE_GRID_SCAN_BLOCKS) {               // one invocation
+        if (i == 0) scan_block_totals();
+        return;
+    }
+    if (i >= u_count) return;                              // the others: one per body
+    if (STAGE == STAGE_GRID_COUNT) grid_count(i);
+    else if (STAGE == STAGE_GRID_SCATTER) grid_scatter(i);
+    else if (STAGE == STAGE_BEGIN) begin_step(i);
+    else if (STAGE == STAGE_COLLIDE_COUNT) collide_count(i);
+    else if (STAGE == STAGE_COLLIDE_APPLY) collide_apply(i);
+    else if (STAGE == STAGE_WARM_START) warm_start_apply(i);
+    else if (STAGE == STAGE_REST) rest_pass(i);
+    else if (STAGE == STAGE_POSITIONS) integrate_positions(i);
+    else if (STAGE == STAGE_FINISH) finish_step(i);
 }
