@@ -14,6 +14,7 @@ import typing
 from pathlib import Path
 
 from scene_model.bodies import Body, PhysicsSettings
+from scene_model.motion import Motion
 from scene_model.fields import field_types, show
 from scene_model.scene import (Background, Camera, Checker, Fog, Light, Material, RenderSettings,
                                Scene)
@@ -105,6 +106,7 @@ def reference() -> str:
         out += section(f'`type = "{kind}"`', cls)
     out += section("`[physics]`", PhysicsSettings)
     out += section("`[[bodies]]`", Body)
+    out += section("`[[motions]]`", Motion)
     out.append(END)
     return "\n".join(out) + "\n"
 

@@ -114,7 +114,7 @@ def _is_vector(hint) -> bool:
 
 COORDINATE_FIELDS = {"Camera.position", "Camera.look_at", "PointLight.position",
                      "SpotLight.position", "Translate.offset", "Capsule.a", "Capsule.b",
-                     "Body.position"}
+                     "Body.position", "Motion.pivot"}
 SIZE_FIELDS = {"Sphere.radius", "Box.half_size", "RoundBox.half_size", "RoundBox.radius",
                "Torus.major_radius", "Torus.minor_radius", "CappedCylinder.radius",
                "CappedCylinder.half_height", "Capsule.radius", "Cone.radius", "Cone.height",
