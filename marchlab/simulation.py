@@ -40,9 +40,6 @@ def _gpu_stepper(world: physics.World, scene: Scene | None = None):
     from gpu_shader.physics import GpuStepper       # imported on use: it needs moderngl
     if scene is None:                               # no shapes, or GpuStepper refuses
         return GpuStepper(world)
-    if scene.motions:
-        raise PhysicsError(f"the gpu backend does not move kinematic objects (objects"
-                           f"[{scene.motions[0].object}] has a motion): use the cpu backend")
     # The shader collides with the renderer's own code for each shape's scene object.
     settings = physics_settings(scene)
     nodes = shape_objects(scene)
