@@ -368,6 +368,11 @@ def check_world(world, shape_nodes=None) -> None:
                            "give GpuStepper shape_nodes")
     if shape_nodes is not None and len(shape_nodes) != len(world.shapes):
         raise PhysicsError(f"{len(shape_nodes)} shape nodes for {len(world.shapes)} shapes")
+    solid = np.flatnonzero(world.kind != 0)
+    if len(solid):
+        from physics.solids import KIND_NAMES
+        raise PhysicsError(f"the gpu backend steps spheres only (body {solid[0]} is a "
+                           f"{KIND_NAMES[world.kind[solid[0]]]}): use the cpu backend")
     moving = [shape.name for shape in world.shapes if shape.motion is not None]
     if moving:
         raise PhysicsError(f"the gpu backend does not move kinematic objects ({moving[0]} has "

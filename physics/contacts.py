@@ -145,7 +145,7 @@ def find_contacts(world, reach: float, counter=None, shapes=None) -> Contacts:
     """
     n = world.count
     dtype = world.dtype
-    alive = np.flatnonzero(world.active)
+    alive = np.flatnonzero(world.spheres)       # boxes and capsules: solid_contacts.py
     x, r = world.position, world.radius
 
     gaps = sphere_plane_gaps(x[alive], r[alive], world.plane_normal, world.plane_offset)

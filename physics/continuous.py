@@ -123,7 +123,7 @@ def bounce_off_statics(world, start, u, acceleration, spin, skip, h, landing=Non
                                                acceleration, remaining, landing, resting)
         time = np.concatenate([_plane_times(world, position, velocity, acceleration,
                                             remaining, skip), shape_time], axis=1)
-        time = np.where(world.active[:, None], time, np.inf)
+        time = np.where(world.spheres[:, None], time, np.inf)     # boxes: no sweep
         static = np.argmin(time, axis=1)
         body = np.flatnonzero(np.isfinite(time[np.arange(n), static]))
         if len(body) == 0:
@@ -200,7 +200,7 @@ def _shape_times(world, shapes, position, velocity, acceleration, remaining, lan
         mine = resting[1] == q
         lift = np.zeros((n, 3), dtype)
         np.add.at(lift, resting[0][mine], skin * resting[2][mine])
-        rows = np.flatnonzero(world.active)
+        rows = np.flatnonzero(world.spheres)
         lifted = position[rows] + lift[rows]
         gap = np.asarray(shape.distance(lifted), dtype) - world.radius[rows]
         reach = gap <= shape.lipschitz * travel[rows] + touch

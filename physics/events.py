@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-EVENT_DTYPE = np.dtype([("step", np.int64), ("time", np.float64), ("kind", "U13"),
+EVENT_DTYPE = np.dtype([("step", np.int64), ("time", np.float64), ("kind", "U15"),
                         ("body", np.int64), ("other", np.int64), ("speed", np.float64),
                         ("impulse", np.float64)])
 """A contact event: at ``step`` (time s), ``body`` hit ``other`` (a body for "sphere-sphere", a

@@ -1,7 +1,7 @@
 """Saving a running world to a file and loading it back, so that a resumed run is bit-identical.
 
-A `World` is two kinds of data. The *fixed description* (the spheres' radii, masses and
-coefficients, the planes, dt, the integrator and solver, the dtype, gravity, the bounds and
+A `World` is two kinds of data. The *fixed description* (the bodies' shapes, sizes, masses
+and coefficients, the planes, dt, the integrator and solver, the dtype, gravity, the bounds and
 the solver's tolerances) comes from the scene and never changes while stepping. The *state*
 is what `World.step` reads and then changes:
 
@@ -36,7 +36,7 @@ from physics.events import EVENT_DTYPE
 from scene_model.files import write_atomically
 
 FORMAT = "marchlab physics state"     # the tag that says what the file is
-VERSION = 1                           # raised whenever the keys or their meaning change
+VERSION = 2                           # raised whenever the keys or their meaning change
 
 # The fixed description, checked in this order so the first difference named is the most
 # basic one. Scalars: (key, what a message calls it, unit).
@@ -46,7 +46,8 @@ SETTINGS = (("dt", "dt", "s"), ("integrator", "integrator", ""), ("solver", "sol
             ("restitution_threshold", "restitution threshold", "m/s"),
             ("slop", "slop", "m"), ("push_out", "push-out fraction", ""))
 # One value per sphere or per plane: (attribute, what a message calls it, unit).
-BODY_COLUMNS = (("radius", "radius", "m"), ("mass", "mass", "kg"),
+BODY_COLUMNS = (("kind", "shape (0 sphere, 1 box, 2 capsule)", ""), ("radius", "radius", "m"),
+                ("extent", "extent", "m"), ("mass", "mass", "kg"),
                 ("restitution", "restitution", ""), ("friction", "friction", ""))
 PLANE_COLUMNS = (("plane_normal", "normal", ""), ("plane_offset", "offset", "m"),
                  ("plane_restitution", "restitution", ""), ("plane_friction", "friction", ""))

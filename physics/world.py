@@ -19,9 +19,15 @@ from physics.continuous import bounce_off_statics, stop_sphere_sweeps
 from physics.errors import (PhysicsError, bounds_box, choice, column, finite, float_dtype, in_range,
                             positive, rows, vector3, whole_number)
 from physics.events import EVENT_DTYPE, make_events
+from physics.colliders import MAX_SHAPE_CONTACTS
 from physics.impulses import SolverBodies
 from physics.integrators import INTEGRATORS, integrate_velocities, parabola_start_velocity
+from physics.point_solver import PointBodies, solve_points
 from physics.quaternions import rotate_orientations
+from physics.solid_contacts import (find_solid_contacts, join_point_contacts,
+                                    sphere_point_contacts, with_levers)
+from physics.solids import (BOX, CAPSULE, KIND_NAMES, SPHERE, free_rotation, principal_inertia,
+                            volume, world_inertia, world_inverse_inertia)
 from physics.solvers import SOLVERS, contact_keys, separate_overlaps, warm_start
 from scene_model.bodies import MAX_DT, MIN_DT
 from scene_model.geometry import dot
@@ -35,7 +41,8 @@ MAX_STEPS = 10 ** 9     # most steps one call may ask for: 1e9 steps are days of
 
 
 class World:
-    """Rigid spheres and static planes under uniform gravity, stepped with a fixed dt.
+    """Rigid spheres, boxes and capsules among static planes and shapes under uniform gravity,
+    stepped with a fixed dt.
 
     Parameters
     ----------
@@ -84,6 +91,8 @@ class World:
         self.position, self.velocity, self.angular_velocity = empty(3), empty(3), empty(3)
         self.orientation = empty(4)
         self.radius, self.mass, self.restitution, self.friction = empty(), empty(), empty(), empty()
+        self.kind = np.zeros(0, np.int8)  # SPHERE, BOX or CAPSULE (solids.py), one per body
+        self.extent = empty(3)            # a box's half sizes, (0, l, 0) for a capsule
         self.active = np.zeros(0, bool)
         self.plane_normal, self.plane_offset = empty(3), empty()
         self.plane_restitution, self.plane_friction = empty(), empty()
@@ -167,7 +176,87 @@ class World:
         self.restitution = grow(self.restitution, restitution)
         self.friction = grow(self.friction, friction)
         self.active = np.concatenate([self.active, np.ones(m, bool)])
+        self.kind = np.concatenate([self.kind, np.full(m, SPHERE, np.int8)])
+        self.extent = grow(self.extent, np.zeros((m, 3)))
         return np.arange(first, first + m)
+
+    def add_box(self, position, half_size, orientation=(1.0, 0.0, 0.0, 0.0),
+                velocity=(0.0, 0.0, 0.0), angular_velocity=(0.0, 0.0, 0.0), mass=None,
+                density=None, restitution=0.5, friction=0.5) -> int:
+        """Add one solid box and return its index among the bodies.
+
+        Parameters
+        ----------
+        position : (3,) array_like
+            Centre (m).
+        half_size : (3,) array_like
+            Half its extent along its own x, y, z (m), each > 0.
+        orientation : (4,) array_like
+            Unit quaternion (w, x, y, z) turning its own axes into the world's (normalised).
+        mass, density : float, optional
+            Mass (kg) or density (kg/m^3, mass = 8 a b c density); at most one. Neither: 1 kg.
+        velocity, angular_velocity, restitution, friction
+            As for `add_sphere`.
+        """
+        half = vector3(half_size, "half_size")
+        for axis, value in zip("xyz", half):
+            positive(value, f"half_size {axis}")
+        return self._add_solid(BOX, position, float(np.sqrt(half @ half)), half, orientation,
+                               velocity, angular_velocity, mass, density, restitution,
+                               friction)
+
+    def add_capsule(self, position, half_length, radius, orientation=(1.0, 0.0, 0.0, 0.0),
+                    velocity=(0.0, 0.0, 0.0), angular_velocity=(0.0, 0.0, 0.0), mass=None,
+                    density=None, restitution=0.5, friction=0.5) -> int:
+        """Add one solid capsule, the points within ``radius`` of the segment from
+        (0, -half_length, 0) to (0, half_length, 0) of its own frame, and return its index.
+
+        Same parameters as `add_box` (mass from density: density times the volume of a
+        cylinder and a sphere).
+        """
+        extent = np.array([0.0, positive(half_length, "half_length"), 0.0])
+        return self._add_solid(CAPSULE, position, positive(radius, "radius"), extent,
+                               orientation, velocity, angular_velocity, mass, density,
+                               restitution, friction)
+
+    def _add_solid(self, kind, position, radius, extent, orientation, velocity,
+                   angular_velocity, mass, density, restitution, friction) -> int:
+        position = vector3(position, "position")
+        q = np.asarray(orientation, np.float64)
+        if q.shape != (4,) or not np.all(np.isfinite(q)) or not q @ q > 0:
+            raise PhysicsError(f"orientation must be a quaternion of four finite numbers, "
+                               f"not all zero (got {orientation!r})")
+        if mass is not None and density is not None:
+            raise PhysicsError("give mass or density, not both")
+        kinds, radii, extents = np.array([kind]), np.array([radius]), extent[None, :]
+        with np.errstate(over="ignore", under="ignore"):
+            if density is not None:
+                mass = float(volume(kinds, radii, extents)[0]) * positive(density, "density")
+            mass = positive(1.0 if mass is None else mass, "mass")
+            moments = principal_inertia(kinds, np.array([mass]), radii, extents)[0]
+        with np.errstate(over="ignore", divide="ignore", under="ignore"):
+            ok = np.isfinite(np.concatenate([[mass, 1 / mass], moments, 1 / moments])
+                             .astype(self.dtype)).all()
+        if not ok:
+            raise PhysicsError(f"mass {mass:.3g} kg of a {KIND_NAMES[kind]} of size "
+                               f"{float(np.max(extents)) + radius:.3g} m is out of range for "
+                               f"{np.dtype(self.dtype).name}: the mass, the moments of inertia "
+                               "and their inverses must be finite")
+        index = self.count
+        grow = lambda old, new: np.concatenate([old, np.asarray(new, self.dtype)])  # noqa: E731
+        self.position = grow(self.position, [position])
+        self.velocity = grow(self.velocity, [vector3(velocity, "velocity")])
+        self.angular_velocity = grow(self.angular_velocity,
+                                     [vector3(angular_velocity, "angular_velocity")])
+        self.orientation = grow(self.orientation, [q / np.sqrt(q @ q)])
+        self.radius = grow(self.radius, [radius])
+        self.mass = grow(self.mass, [mass])
+        self.restitution = grow(self.restitution, [in_range(restitution, "restitution", 0, 1)])
+        self.friction = grow(self.friction, [in_range(friction, "friction", 0)])
+        self.active = np.concatenate([self.active, [True]])
+        self.kind = np.concatenate([self.kind, np.array([kind], np.int8)])
+        self.extent = grow(self.extent, [extent])
+        return index
 
     def add_plane(self, normal, offset, restitution=0.0, friction=0.5) -> int:
         """Add the static plane ``normal/|normal| . x = offset`` (solid on the side away from
@@ -223,15 +312,50 @@ class World:
 
     @property
     def inverse_inertia(self) -> np.ndarray:
-        """1/I (N,) in 1/(kg m^2), with I = 2/5 m r^2 for a solid sphere."""
+        """1/I (N,) in 1/(kg m^2), with I = 2/5 m r^2 for a solid sphere (the sphere solver's;
+        for a box or capsule it means nothing: see `inverse_inertia_tensor`)."""
         return 1 / (0.4 * self.mass * self.radius * self.radius)
 
+    @property
+    def spheres(self) -> np.ndarray:
+        """(N,) bool: the active bodies that are spheres, the ones the sphere code steps."""
+        return self.active & (self.kind == SPHERE)
+
+    @property
+    def principal_inertia(self) -> np.ndarray:
+        """Principal moments of inertia (N, 3) in kg m^2, about each body's own axes."""
+        return principal_inertia(self.kind, self.mass, self.radius, self.extent)
+
+    def inverse_inertia_tensor(self) -> np.ndarray:
+        """World-frame I^-1 (N, 3, 3) in 1/(kg m^2), for the bodies' present orientations."""
+        return world_inverse_inertia(self.orientation, self.principal_inertia)
+
+    def angular_momentum(self) -> np.ndarray:
+        """Total angular momentum about the origin of the active bodies, (3,) in kg m^2/s:
+        sum of m x cross v + I_world w."""
+        on = self.active
+        spin = np.einsum("nij,nj->ni", world_inertia(self.orientation[on],
+                                                     self.principal_inertia[on]),
+                         self.angular_velocity[on])
+        orbit = self.mass[on, None] * np.cross(self.position[on], self.velocity[on])
+        return np.sum(orbit + spin, axis=0).astype(np.float64)
+
     def kinetic_energy(self) -> float:
-        """Translational plus rotational kinetic energy of the active spheres (J)."""
+        """Translational plus rotational kinetic energy of the active bodies (J)."""
         v, w = self.velocity[self.active], self.angular_velocity[self.active]
         m, r = self.mass[self.active], self.radius[self.active]
-        return float(np.sum(0.5 * m * np.sum(v * v, axis=1))
-                     + np.sum(0.5 * (0.4 * m * r * r) * np.sum(w * w, axis=1)))
+        sphere = self.kind[self.active] == SPHERE
+        if sphere.all():
+            return float(np.sum(0.5 * m * np.sum(v * v, axis=1))
+                         + np.sum(0.5 * (0.4 * m * r * r) * np.sum(w * w, axis=1)))
+        # A box's or capsule's spin energy is w . I_world w / 2.
+        solid = np.flatnonzero(self.active)[~sphere]
+        inertia = world_inertia(self.orientation[solid], self.principal_inertia[solid])
+        m, r, w_sphere = m[sphere], r[sphere], w[sphere]
+        w = self.angular_velocity[solid]
+        return float(np.sum(0.5 * self.mass[self.active] * np.sum(v * v, axis=1))
+                     + np.sum(0.5 * (0.4 * m * r * r) * np.sum(w_sphere * w_sphere, axis=1))
+                     + 0.5 * np.sum(w * np.einsum("nij,nj->ni", inertia, w)))
 
     def potential_energy(self) -> float:
         """Gravitational potential energy -sum m g.x of the active spheres (J), zero at x = 0."""
@@ -259,7 +383,7 @@ class World:
         if dtype is not None:
             other.dtype = float_dtype(dtype)
             for name in ("gravity", "position", "velocity", "angular_velocity", "orientation",
-                         "radius", "mass", "restitution", "friction", "plane_normal",
+                         "radius", "mass", "restitution", "friction", "extent", "plane_normal",
                          "plane_offset", "plane_restitution", "plane_friction"):
                 setattr(other, name, getattr(other, name).astype(other.dtype))
             if other._resting_impulses is not None:
@@ -290,6 +414,7 @@ class World:
         scheme = INTEGRATORS[self.integrator]
         moving = self.active
         x_old, v_old = self.position, self.velocity
+        solids = np.flatnonzero(self.kind != SPHERE)
 
         # 1. integrate velocities: v* = v_n + h g
         v = integrate_velocities(v_old, self.gravity, h, moving)
@@ -320,17 +445,36 @@ class World:
         gravity_part = np.where(contacts.static, h * dot(contacts.normal, self.gravity), 0)
         keys = contact_keys(contacts, n, len(self.plane_offset), len(self.shapes))
         order = np.argsort(keys, kind="stable")
-        warm = warm_start(keys, self._resting_impulses, self.dtype)
-        collisions = SOLVERS[self.solver](bodies, contacts, gravity_part.astype(self.dtype), h,
-                                          self.restitution_threshold, self.iterations, warm,
-                                          counter=work)
-        self._resting_impulses = (keys[order], warm[0][order], warm[1][order])
+        solid_contacts = (find_solid_contacts(self, shapes, MAX_SHAPE_CONTACTS) if len(solids)
+                          else ())
+        if len(solid_contacts) == 0:
+            warm = warm_start(keys, self._resting_impulses, self.dtype)
+            collisions = SOLVERS[self.solver](bodies, contacts, gravity_part.astype(self.dtype),
+                                              h, self.restitution_threshold, self.iterations,
+                                              warm, counter=work)
+            self._resting_impulses = (keys[order], warm[0][order], warm[1][order])
+            solved = contacts
+        else:
+            # A box or capsule touches something: every contact is solved at its point
+            # (point_solver.py), the spheres' with them, in one order.
+            solved, collisions = self._solve_at_points(
+                bodies, sphere_point_contacts(contacts, self, keys), solid_contacts, h, work)
         v_new, spin = bodies.velocity[:n], bodies.spin[:n]
 
         # 4. integrate positions (and orientations, with the same scheme)
         x_new = scheme.positions(x_old, v_old, v_new, h)
         turn = scheme.positions(np.zeros_like(spin), self.angular_velocity, spin, h)
+        q_old = self.orientation
         self.orientation = rotate_orientations(self.orientation, turn)
+        if len(solids):
+            # Free flight keeps the angular momentum L = I_world w, not w: a box or capsule
+            # turns with its L by the splitting of solids.free_rotation, whatever the
+            # integrator, and its new w is L through its inertia where it now points.
+            principal = self.principal_inertia[solids]
+            momentum = np.einsum("nij,nj->ni", world_inertia(q_old[solids], principal),
+                                 spin[solids])
+            self.orientation[solids], spin[solids] = free_rotation(q_old[solids], principal,
+                                                                   momentum, h)
 
         # Continuous collision: bounce off planes and shapes reached during the step ...
         touching = np.zeros((n, len(self.plane_offset)), bool)
@@ -349,22 +493,51 @@ class World:
         v_new[bounced] = (end_velocity[bounced]
                           - (scheme.weight - 0.5) * h * end_acceleration[bounced])
         # ... and stop spheres at their first touch with another.
-        stop_sphere_sweeps(x_old, x_new, self.radius, moving, self.slop, work)
+        stop_sphere_sweeps(x_old, x_new, self.radius, self.spheres, self.slop, work)
 
         # One push-out pass a step, never more: it removes ``push_out`` of each overlap.
-        separate_overlaps(x_new, contacts, bodies.inverse_mass, self.slop, self.push_out)
+        separate_overlaps(x_new, solved, bodies.inverse_mass, self.slop, self.push_out)
         work["push-out passes"] += 1
         self.work = work
 
         self.position, self.velocity, self.angular_velocity = x_new, v_new, spin
         self.steps += 1
-        self._record(contacts, collisions, hits)
+        self._record(solved, collisions, hits)
         self._remove_out_of_bounds()
 
+    def _solve_at_points(self, bodies, sphere_contacts, solid_contacts, h, work):
+        """Solve every contact at its point (point_solver.py); ``bodies`` gets the result.
+
+        Returns the contacts solved (physics.solid_contacts.PointContacts) and the collisions.
+        """
+        n = self.count
+        if self.solver != "sequential":
+            raise PhysicsError(f"boxes and capsules need the sequential solver (this world "
+                               f"has solver {self.solver!r})")
+        every = with_levers(join_point_contacts(sphere_contacts, solid_contacts),
+                            self.position)
+        tensors = np.concatenate([self.inverse_inertia_tensor(),
+                                  np.zeros((1, 3, 3), self.dtype)]).astype(self.dtype)
+        tensors[:n][self.kind == SPHERE] = (self.inverse_inertia[self.kind == SPHERE, None, None]
+                                            * np.eye(3, dtype=self.dtype))
+        tensors[:n][~self.active] = 0
+        points = PointBodies(bodies.velocity, bodies.spin, bodies.inverse_mass, tensors)
+        gravity_part = np.where(every.static, h * dot(every.normal, self.gravity), 0)
+        warm = warm_start(every.key, self._resting_impulses, self.dtype)
+        collisions = solve_points(points, every, gravity_part.astype(self.dtype), h,
+                                  self.restitution_threshold, self.iterations, warm,
+                                  counter=work)
+        self._resting_impulses = (every.key, warm[0], warm[1])
+        work["contacts"] = len(every)
+        return every, collisions
+
     def _record(self, contacts, collisions, hits) -> None:
+        at_points = not hasattr(contacts, "radius_a")      # PointContacts name their kinds
         for index, approach, impulse in collisions:
-            self._add_events(contacts.kind()[index], contacts.a[index],
-                             contacts.other()[index], approach, impulse)
+            self._add_events(contacts.kind[index] if at_points else contacts.kind()[index],
+                             contacts.a[index],
+                             contacts.other[index] if at_points else contacts.other()[index],
+                             approach, impulse)
         planes = len(self.plane_offset)
         for body, static, approach, impulse in hits:
             self._add_events(np.where(static < planes, "sphere-plane", "sphere-shape"), body,

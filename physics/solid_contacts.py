@@ -1,0 +1,448 @@
+"""Contacts of boxes and capsules: with planes, shapes, spheres and each other, at points.
+
+A sphere's contact needs no point: it is always r n from the centre (contacts.py). A box's
+is wherever the two surfaces meet, so a contact here is a `PointContacts` row: the point p,
+the unit normal n from b to a, the gap along n (negative when they overlap), and the lever
+arms p - x_a and p - x_b that the solver turns into torque (point_solver.py). How each pair
+finds its points, the exact test where there is one, samples where there is not:
+
+    box-plane        the 8 corners: gap = n . c - offset                         exact
+    capsule-plane    the 2 segment ends, spheres of the capsule's radius         exact
+    box-shape        26 points of the box's surface (corners, edge midpoints,
+                     face centres) in the shape's SDF: gap = d(p)                sampled
+    capsule-shape    5 points along the segment: gap = d(p) - r                  sampled
+    sphere-box       the centre in the box's exact SDF: gap = d(x) - r           exact
+    sphere-capsule   the centre against the segment's nearest point             exact
+    box-box          separating axes and face clipping (box_contacts.py)         exact
+    capsule-box      the segment's ends and its point nearest the box (the box's
+                     SDF is convex along the segment: a ternary search finds it)  exact
+    capsule-capsule  the segments' nearest points, and each end against the
+                     other segment (two points for capsules lying side by side)  exact
+
+("One body's SDF at the other's surface samples", Guendelman, Bridson and Fedkiw,
+"Nonconvex rigid bodies with stacking", SIGGRAPH 2003, section 5: a sampled surface touches
+where a sample is inside; what lies between two samples is not seen, so a peg thinner than
+half a box's side can poke into its face. docs/physics.md says so.)
+
+A contact is found while its gap is below a **speculative margin**: the slop plus how far the
+two surfaces can close in one step, h (|v| + R |w|) + h^2 |g| for each body (R its bounding
+radius). The solver lets such a contact close its gap and no more (target normal velocity
+-gap / h, as in Box2D v3's speculative contacts), so a box falling at any speed lands on the
+floor instead of a step into it. Each contact has a key that names it from step to step (the
+pair and a feature: which corner, which sample), for warm starting.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from physics.box_contacts import box_box_contacts
+from physics.colliders import FALLBACK_NORMAL, surface_near
+from physics.quaternions import rotation_matrices
+from physics.solids import (BOX, CAPSULE, CAPSULE_SAMPLES, KIND_NAMES, SPHERE, box_distance,
+                            box_points, bounding_radius, capsule_ends, segment_closest,
+                            segments_closest)
+from scene_model.geometry import dot
+
+FEATURES = 4096          # features per pair in a contact key (box_contacts stays below it)
+TERNARY_STEPS = 40       # halvings of the segment when looking for its point nearest a box
+END_SKIP = 0.01          # the nearest point within this fraction of an end: the end's contact
+
+
+@dataclass
+class PointContacts:
+    """K contacts at points, in a fixed order. Arrays of length K.
+
+    Attributes
+    ----------
+    a, b : (K,) int64
+        The bodies; b is N (the static world) for a plane or shape.
+    static : (K,) bool
+        Whether b is the static world.
+    other : (K,) int64
+        What an event names as b: the plane's, the shape's or the body's index.
+    kind : (K,) str
+        ``"box-plane"``, ``"sphere-box"``, ... (a's kind, then b's).
+    point : (K, 3)
+        Contact point (m), on or between the two surfaces.
+    lever_a, lever_b : (K, 3)
+        p - x_a and p - x_b (m); 0 for the static world.
+    normal : (K, 3)
+        Unit normal from b toward a.
+    gap : (K,)
+        Separation along the normal (m), negative when they overlap.
+    restitution, friction : (K,)
+        The pair's coefficients, max(e_a, e_b) and sqrt(mu_a mu_b).
+    surface_velocity : (K, 3)
+        Velocity of a moving static surface at p (m/s), 0 for everything else.
+    key : (K,) int64
+        Names the contact from step to step (sorted ascending).
+    """
+    a: np.ndarray
+    b: np.ndarray
+    static: np.ndarray
+    other: np.ndarray
+    kind: np.ndarray
+    point: np.ndarray
+    lever_a: np.ndarray
+    lever_b: np.ndarray
+    normal: np.ndarray
+    gap: np.ndarray
+    restitution: np.ndarray
+    friction: np.ndarray
+    surface_velocity: np.ndarray
+    key: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.a)
+
+    def select(self, keep) -> "PointContacts":
+        """The contacts at ``keep`` (a boolean mask or indices), in that order."""
+        return PointContacts(**{name: value[keep] for name, value in vars(self).items()})
+
+
+
+def solid_key_base(bodies: int, planes: int, shapes: int, shape_slots: int) -> int:
+    """The first key of a solid contact: above every key `solvers.contact_keys` gives a
+    sphere contact, so both kinds of contact share one warm-start store."""
+    return bodies * (bodies + 1 + planes + shapes * shape_slots) + 1
+
+
+def speculative_margin(world) -> np.ndarray:
+    """How far (m) each body's surface can move toward another in one step, plus the slop:
+    slop + h (|v| + R |w|) + h^2 |g|, (N,)."""
+    h = world.dtype(world.dt)
+    speed = np.sqrt(dot(world.velocity, world.velocity))
+    spin = np.sqrt(dot(world.angular_velocity, world.angular_velocity))
+    reach = bounding_radius(world.kind, world.radius, world.extent)
+    gravity = np.sqrt(world.gravity @ world.gravity)
+    return (world.slop + h * (speed + reach * spin) + h * h * gravity).astype(world.dtype)
+
+
+def find_solid_contacts(world, shapes, shape_slots: int) -> PointContacts:
+    """Every contact of the world's active boxes and capsules, with gap below the speculative
+    margin (`speculative_margin`), sorted by key.
+
+    Parameters
+    ----------
+    world : physics.World
+    shapes : list of physics.colliders.Shape
+        The static shapes where they are now.
+    shape_slots : int
+        Contacts a sphere may have per shape (for the key base, see `solid_key_base`).
+    """
+    n = world.count
+    planes, nshapes = len(world.plane_offset), len(shapes)
+    solids = np.flatnonzero(world.active & (world.kind != SPHERE))
+    margin = speculative_margin(world)
+    parts = []
+    if len(solids):
+        parts += _plane_contacts(world, solids, margin)
+        parts += _shape_contacts(world, shapes, solids, margin)
+        parts += _body_contacts(world, solids, margin)
+    statics = n + 1 + planes + nshapes
+    base = solid_key_base(n, planes, nshapes, shape_slots)
+    return _join(parts, n, statics, base, world.dtype)
+
+
+def _part(a, b, other, other_id, kind, feature, point, normal, gap, restitution, friction,
+          surface_velocity=None) -> dict:
+    """One batch of contacts as a dict of arrays (joined by `_join`)."""
+    count = len(a)
+    return dict(a=np.asarray(a, np.int64), b=np.asarray(b, np.int64),
+                other=np.broadcast_to(np.asarray(other, np.int64), (count,)),
+                other_id=np.broadcast_to(np.asarray(other_id, np.int64), (count,)),
+                kind=np.broadcast_to(np.asarray(kind, "U15"), (count,)),
+                feature=np.asarray(feature, np.int64), point=point, normal=normal, gap=gap,
+                restitution=np.broadcast_to(restitution, (count,)),
+                friction=np.broadcast_to(friction, (count,)),
+                surface_velocity=(np.zeros_like(point) if surface_velocity is None
+                                  else surface_velocity))
+
+
+def _join(parts, n, statics, base, dtype) -> PointContacts:
+    parts = [p for p in parts if len(p["a"])]
+    if not parts:
+        return empty_point_contacts(dtype)
+    column = {name: np.concatenate([p[name] for p in parts]) for name in parts[0]}
+    key = base + (column["a"] * statics + column["other_id"]) * FEATURES + column["feature"]
+    order = np.argsort(key, kind="stable")
+    return point_contacts(column["a"][order], column["b"][order], column["other"][order],
+                          column["kind"][order], column["point"][order].astype(dtype),
+                          column["normal"][order].astype(dtype),
+                          column["gap"][order].astype(dtype),
+                          column["restitution"][order].astype(dtype),
+                          column["friction"][order].astype(dtype),
+                          column["surface_velocity"][order].astype(dtype), key[order], n)
+
+
+def point_contacts(a, b, other, kind, point, normal, gap, restitution, friction,
+                   surface_velocity, key, static_row, position=None) -> PointContacts:
+    """A `PointContacts` with its lever arms taken from ``position`` (N, 3), if given, else
+    left to `with_levers`."""
+    contacts = PointContacts(a=a, b=b, static=b == static_row, other=other, kind=kind,
+                             point=point, lever_a=np.zeros_like(point),
+                             lever_b=np.zeros_like(point), normal=normal, gap=gap,
+                             restitution=restitution, friction=friction,
+                             surface_velocity=surface_velocity, key=key)
+    if position is not None:
+        with_levers(contacts, position)
+    return contacts
+
+
+def with_levers(contacts: PointContacts, position) -> PointContacts:
+    """Set the lever arms p - x_a and p - x_b (0 for the static world) from centres (N, 3)."""
+    padded = np.concatenate([position, np.zeros((1, 3), position.dtype)])
+    contacts.lever_a = contacts.point - padded[contacts.a]
+    contacts.lever_b = np.where(contacts.static[:, None], 0,
+                                contacts.point - padded[contacts.b])
+    return contacts
+
+
+def empty_point_contacts(dtype) -> PointContacts:
+    none = np.zeros(0, np.int64)
+    vectors = np.zeros((0, 3), dtype)
+    return PointContacts(a=none, b=none, static=np.zeros(0, bool), other=none,
+                         kind=np.zeros(0, "U15"), point=vectors, lever_a=vectors,
+                         lever_b=vectors, normal=vectors, gap=np.zeros(0, dtype),
+                         restitution=np.zeros(0, dtype), friction=np.zeros(0, dtype),
+                         surface_velocity=vectors, key=none)
+
+
+def sphere_point_contacts(contacts, world, keys) -> PointContacts:
+    """Sphere contacts (contacts.py `Contacts`) as point contacts: the point is r_a n from
+    a's centre toward b; ``keys`` (K,) from `solvers.contact_keys`."""
+    point = world.position[contacts.a] - contacts.radius_a[:, None] * contacts.normal
+    return point_contacts(contacts.a, contacts.b, contacts.other(), contacts.kind(), point,
+                          contacts.normal, contacts.gap, contacts.restitution,
+                          contacts.friction, contacts.surface_velocity, keys, world.count)
+
+
+def join_point_contacts(first: PointContacts, second: PointContacts) -> PointContacts:
+    """Both sets, sorted by key (the keys of the two never coincide)."""
+    joined = PointContacts(**{name: np.concatenate([getattr(first, name),
+                                                     getattr(second, name)])
+                              for name in vars(first)})
+    return joined.select(np.argsort(joined.key, kind="stable"))
+
+
+# --- the pairs ----------------------------------------------------------------------------
+
+def _support(world, rows, which: str):
+    """Points of bodies ``rows`` that meet a plane or an SDF first: (body (K,), point (K, 3),
+    radius (K,), feature (K,)). Boxes: their corners (``which = "corners"``) or 26 surface
+    points (``"surface"``), radius 0. Capsules: their two ends, or CAPSULE_SAMPLES points along
+    the segment, with the capsule's radius."""
+    dtype = world.dtype
+    body, point, radius, feature = [], [], [], []
+    boxes = rows[world.kind[rows] == BOX]
+    if len(boxes):
+        local = box_points(world.extent[boxes], which).astype(dtype)       # (M, P, 3)
+        rotation = rotation_matrices(world.orientation[boxes])
+        where = world.position[boxes][:, None, :] + np.einsum("mij,mpj->mpi", rotation, local)
+        count = local.shape[1]
+        body.append(np.repeat(boxes, count))
+        point.append(where.reshape(-1, 3))
+        radius.append(np.zeros(len(boxes) * count, dtype))
+        feature.append(np.tile(np.arange(count), len(boxes)))
+    capsules = rows[world.kind[rows] == CAPSULE]
+    if len(capsules):
+        start, end = capsule_ends(world.position[capsules], world.orientation[capsules],
+                                  world.extent[capsules])
+        t = np.array([0.0, 1.0]) if which == "corners" else np.linspace(0, 1, CAPSULE_SAMPLES)
+        where = start[:, None, :] + t[None, :, None].astype(dtype) * (end - start)[:, None, :]
+        body.append(np.repeat(capsules, len(t)))
+        point.append(where.reshape(-1, 3))
+        radius.append(np.repeat(world.radius[capsules], len(t)))
+        feature.append(np.tile(np.arange(len(t)), len(capsules)))
+    return (np.concatenate(body), np.concatenate(point).astype(dtype),
+            np.concatenate(radius).astype(dtype), np.concatenate(feature))
+
+
+def _kind(world, body) -> np.ndarray:
+    return np.asarray(KIND_NAMES)[world.kind[body]]
+
+
+def _plane_contacts(world, solids, margin) -> list:
+    body, point, radius, feature = _support(world, solids, "corners")
+    n = world.count
+    parts = []
+    for plane, (normal, offset) in enumerate(zip(world.plane_normal, world.plane_offset)):
+        gap = point @ normal - offset - radius
+        near = gap <= margin[body]
+        rows = body[near]
+        parts.append(_part(
+            rows, np.full(len(rows), n), plane, n + 1 + plane,
+            np.char.add(_kind(world, rows), "-plane"), feature[near],
+            point[near] - radius[near, None] * normal, np.tile(normal, (len(rows), 1)),
+            gap[near], np.maximum(world.restitution[rows], world.plane_restitution[plane]),
+            np.sqrt(world.friction[rows] * world.plane_friction[plane])))
+    return parts
+
+
+def _shape_contacts(world, shapes, solids, margin) -> list:
+    body, point, radius, feature = _support(world, solids, "surface")
+    n, planes = world.count, len(world.plane_offset)
+    parts = []
+    for index, shape in enumerate(shapes):
+        distance = np.asarray(shape.distance(point), world.dtype)
+        near = np.flatnonzero(distance - radius <= margin[body])
+        if len(near) == 0:
+            continue
+        d, normal = surface_near(shape, point[near], distance[near])
+        rows = body[near]
+        touch = point[near] - radius[near, None] * normal
+        e, mu = shape.coefficients(touch)
+        parts.append(_part(
+            rows, np.full(len(rows), n), index, n + 1 + planes + index,
+            np.char.add(_kind(world, rows), "-shape"), feature[near], touch, normal,
+            d - radius[near], np.maximum(world.restitution[rows], e),
+            np.sqrt(world.friction[rows] * np.asarray(mu, world.dtype)),
+            shape.surface_velocity(touch)))
+    return parts
+
+
+def _body_contacts(world, solids, margin) -> list:
+    """Contacts of each solid with the spheres and the later solids near it."""
+    x, active = world.position, world.active
+    reach = bounding_radius(world.kind, world.radius, world.extent)
+    parts = []
+    for s in solids:
+        d = x - x[s]
+        close = np.sqrt(dot(d, d)) <= reach + reach[s] + margin + margin[s]
+        close &= active & ((world.kind == SPHERE) | (np.arange(world.count) > s))
+        close[s] = False
+        others = np.flatnonzero(close)
+        if len(others) == 0:
+            continue
+        spheres = others[world.kind[others] == SPHERE]
+        if len(spheres):
+            parts.append(_sphere_solid(world, spheres, s, margin))
+        for j in others[world.kind[others] != SPHERE]:
+            parts.append(_solid_solid(world, s, j, margin[s] + margin[j]))
+    return parts
+
+
+def _coefficients(world, a, b):
+    return (np.maximum(world.restitution[a], world.restitution[b]),
+            np.sqrt(world.friction[a] * world.friction[b]))
+
+
+def _sphere_solid(world, spheres, s, margin) -> dict:
+    """Spheres (K,) against solid s: the sphere is a, the solid b."""
+    x, dtype = world.position, world.dtype
+    centre = x[spheres]
+    if world.kind[s] == BOX:
+        rotation = rotation_matrices(world.orientation[s:s + 1])[0]
+        local = (centre - x[s]) @ rotation
+        distance, gradient = box_distance(local, np.broadcast_to(world.extent[s], local.shape))
+        normal = gradient @ rotation.T
+    else:
+        start, end = capsule_ends(x[s:s + 1], world.orientation[s:s + 1], world.extent[s:s + 1])
+        start, end = np.repeat(start, len(spheres), 0), np.repeat(end, len(spheres), 0)
+        t = segment_closest(start, end, centre)
+        nearest = start + t[:, None] * (end - start)
+        distance, normal = _apart(centre, nearest)
+        distance = distance - world.radius[s]
+    gap = (distance - world.radius[spheres]).astype(dtype)
+    near = gap <= margin[spheres] + margin[s]
+    rows, normal = spheres[near], normal[near].astype(dtype)
+    e, mu = _coefficients(world, rows, s)
+    return _part(rows, np.full(len(rows), s), s, s, "sphere-" + KIND_NAMES[world.kind[s]],
+                 np.zeros(len(rows)), centre[near] - world.radius[rows, None] * normal, normal,
+                 gap[near], e, mu)
+
+
+def _apart(p, q):
+    """|p - q| (K,) and the unit direction from q to p (K, 3), FALLBACK_NORMAL where p = q."""
+    d = p - q
+    distance = np.sqrt(dot(d, d))
+    same = distance == 0
+    normal = np.where(same[:, None], np.asarray(FALLBACK_NORMAL, p.dtype),
+                      d / np.where(same, 1, distance)[:, None])
+    return distance, normal
+
+
+def _solid_solid(world, s, j, reach) -> dict:
+    """Contacts of two solids, s before j in the world."""
+    kinds = (int(world.kind[s]), int(world.kind[j]))
+    if kinds == (BOX, BOX):
+        return _box_box(world, s, j, reach)
+    if kinds == (CAPSULE, CAPSULE):
+        return _capsule_capsule(world, s, j, reach)
+    capsule, box = (s, j) if kinds[0] == CAPSULE else (j, s)
+    return _capsule_box(world, capsule, box, reach)
+
+
+def _box_box(world, a, b, reach) -> dict:
+    x, q = world.position, world.orientation
+    rotation = rotation_matrices(q[[a, b]])
+    point, normal, gap, feature = box_box_contacts(x[a], rotation[0], world.extent[a], x[b],
+                                                   rotation[1], world.extent[b], reach)
+    e, mu = _coefficients(world, a, b)
+    count = len(gap)
+    return _part(np.full(count, a), np.full(count, b), b, b, "box-box", feature, point, normal,
+                 gap, e, mu)
+
+
+def _capsule_box(world, capsule, box, reach) -> dict:
+    """The capsule's segment ends and its point nearest the box: the capsule is a."""
+    x, dtype = world.position, world.dtype
+    start, end = capsule_ends(x[capsule:capsule + 1], world.orientation[capsule:capsule + 1],
+                              world.extent[capsule:capsule + 1])
+    rotation = rotation_matrices(world.orientation[box:box + 1])[0]
+    half = world.extent[box]
+
+    def distance(t):
+        local = (start + np.asarray(t, dtype)[:, None] * (end - start) - x[box]) @ rotation
+        return box_distance(local, np.broadcast_to(half, local.shape))
+
+    # The signed distance to a convex solid is convex, and so along a segment: a ternary
+    # search narrows [0, 1] to the nearest point.
+    low, high = 0.0, 1.0
+    for _ in range(TERNARY_STEPS):
+        third = (high - low) / 3
+        m1, m2 = low + third, high - third
+        if distance([m1])[0][0] <= distance([m2])[0][0]:
+            high = m2
+        else:
+            low = m1
+    middle = 0.5 * (low + high)
+    t = np.array([0.0, 1.0] + ([middle] if END_SKIP < middle < 1 - END_SKIP else []))
+    d, gradient = distance(t)
+    normal = (gradient @ rotation.T).astype(dtype)
+    gap = (d - world.radius[capsule]).astype(dtype)
+    near = gap <= reach
+    point = start + t[:, None].astype(dtype) * (end - start) - world.radius[capsule] * normal
+    e, mu = _coefficients(world, capsule, box)
+    count = int(near.sum())
+    return _part(np.full(count, capsule), np.full(count, box), box, box, "capsule-box",
+                 np.flatnonzero(near), point[near], normal[near], gap[near], e, mu)
+
+
+def _capsule_capsule(world, a, b, reach) -> dict:
+    """Nearest points of the two segments, and each end against the other segment."""
+    x, q, e3 = world.position, world.orientation, world.extent
+    p1, q1 = capsule_ends(x[a:a + 1], q[a:a + 1], e3[a:a + 1])
+    p2, q2 = capsule_ends(x[b:b + 1], q[b:b + 1], e3[b:b + 1])
+    s, t = segments_closest(p1, q1, p2, q2)
+    on_a = [p1 + s[:, None] * (q1 - p1), p1, q1]
+    on_b = [p2 + t[:, None] * (q2 - p2)]
+    for end in (p1, q1):
+        on_b.append(p2 + segment_closest(p2, q2, end)[:, None] * (q2 - p2))
+    for end in (p2, q2):
+        on_a.append(p1 + segment_closest(p1, q1, end)[:, None] * (q1 - p1))
+        on_b.append(end)
+    pa, pb = np.concatenate(on_a), np.concatenate(on_b)
+    distance, normal = _apart(pa, pb)
+    gap = distance - world.radius[a] - world.radius[b]
+    # Keep one contact per distinct point of a: the nearest points often are an end.
+    size = max(float(e3[a, 1]), float(e3[b, 1]), float(world.radius[a]))
+    keep = [k for k in range(len(pa)) if gap[k] <= reach and not any(
+        np.sum((pa[k] - pa[m]) ** 2) <= (1e-6 * size) ** 2 and gap[m] <= reach
+        for m in range(k))]
+    e, mu = _coefficients(world, a, b)
+    return _part(np.full(len(keep), a), np.full(len(keep), b), b, b, "capsule-capsule", keep,
+                 pa[keep] - world.radius[a] * normal[keep], normal[keep], gap[keep], e, mu)
