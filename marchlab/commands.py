@@ -236,7 +236,8 @@ def cmd_simulate(args) -> int:
         raise MarchlabError(f"{args.scene}: physics: {err}") from None
 
     images = render_frames(scene, trajectory.positions, width, height, backend,
-                           allow_large=args.allow_large, times=trajectory.times)
+                           allow_large=args.allow_large, times=trajectory.times,
+                           orientations=trajectory.orientations)
     payloads = {output: (gif_bytes(images, plan.frame_seconds) if kind == ".gif"
                          else mp4_bytes(images, 1 / plan.frame_seconds))}
     if table is not None:
@@ -326,18 +327,22 @@ def cmd_bench_accuracy(args) -> int:
 
 
 def render_frames(scene, positions, width: int, height: int, backend: str,
-                  allow_large: bool = False, times=None) -> list:
+                  allow_large: bool = False, times=None, orientations=None) -> list:
     """One 8-bit RGB image (H, W, 3) per row of ``positions`` (T, N, 3), with a progress bar;
-    ``times`` (T,) s place the kinematic objects (`scene_model.scene.scene_at`).
+    ``times`` (T,) s place the kinematic objects (`scene_model.scene.scene_at`) and
+    ``orientations`` (T, N, 4) turn the boxes and capsules.
 
     Only numbers change from frame to frame, so the GPU backend compiles its program for the
     first frame and reuses it for the others.
     """
+    from .simulation import body_rotations
     images = []
     times = [None] * len(positions) if times is None else times
     with progress_bar(len(positions), unit="frame") as progress:
         for index, centres in enumerate(positions):
-            frame = render(scene_at(scene, centres, times[index]), width, height,
+            rotations = (None if orientations is None
+                         else body_rotations(orientations[index]))
+            frame = render(scene_at(scene, centres, times[index], rotations), width, height,
                            backend=backend, allow_large=allow_large)
             images.append(frame.image("color"))
             if progress:

@@ -22,8 +22,11 @@ import numpy as np
 from physics import PhysicsError
 import physics
 from physics.errors import choice
+from physics.quaternions import quaternion_from_matrix, rotation_matrices
 from scene_model.bodies import PhysicsSettings
 from scene_model.errors import MarchlabError, SceneError
+from scene_model.geometry import rotation_matrix
+from scene_model.motion import euler_degrees
 from scene_model.scene import Scene
 
 from .budget import check_physics
@@ -108,12 +111,19 @@ def build_world(scene: Scene, dtype=np.float64) -> physics.World:
         try:
             # physics refuses a mass or moment of inertia that is not finite (with its
             # inverse) in the world's precision; the error is named by the body here.
+            common = dict(velocity=body.velocity, angular_velocity=body.angular_velocity,
+                          mass=mass, density=density,
+                          restitution=_either(body.restitution, settings.restitution),
+                          friction=_either(body.friction, settings.friction))
+            turn = quaternion_from_matrix(rotation_matrix(body.rotation))
             with np.errstate(over="ignore", divide="ignore"):
-                world.add_sphere(body.position, velocity=body.velocity, radius=body.radius,
-                                 mass=mass, density=density,
-                                 restitution=_either(body.restitution, settings.restitution),
-                                 friction=_either(body.friction, settings.friction),
-                                 angular_velocity=body.angular_velocity)
+                if body.shape == "box":
+                    world.add_box(body.position, body.half_size, orientation=turn, **common)
+                elif body.shape == "capsule":
+                    world.add_capsule(body.position, body.half_length, body.radius,
+                                      orientation=turn, **common)
+                else:
+                    world.add_sphere(body.position, radius=body.radius, **common)
         except PhysicsError as err:
             raise SceneError(str(err), ("bodies", index)) from None
     for normal, offset in static_planes(scene):
@@ -126,6 +136,13 @@ def build_world(scene: Scene, dtype=np.float64) -> physics.World:
 
 def _either(value, default):
     return default if value is None else value
+
+
+def body_rotations(orientations) -> np.ndarray:
+    """Euler angles (N, 3) in degrees (R = Rz Ry Rx, as a scene's rotate node) of the
+    orientations (N, 4) of a world's bodies, for `scene_model.scene.scene_at`."""
+    matrices = rotation_matrices(np.asarray(orientations, np.float64).reshape(-1, 4))
+    return np.array([euler_degrees(matrix) for matrix in matrices]).reshape(-1, 3)
 
 
 @dataclass(frozen=True)

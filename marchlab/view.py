@@ -491,7 +491,10 @@ class Viewer:
         them (what the probe and the reference check look at)."""
         scene = self.scene
         if self.playback is not None:
-            scene = scene_at(scene, self.playback.positions(), self.playback.world.time)
+            from .simulation import body_rotations
+            world = self.playback.world
+            scene = scene_at(scene, self.playback.positions(), world.time,
+                             body_rotations(world.orientation))
         return scene
 
     def check_against_reference(self, gpu_frame, background: bool = True):

@@ -1,27 +1,29 @@
-"""The moving part of a scene: the ``[physics]`` settings and the dynamic spheres, ``[[bodies]]``.
+"""The moving part of a scene: the ``[physics]`` settings and the dynamic bodies, ``[[bodies]]``.
 
-A `Body` is a solid sphere that the physics module moves and every renderer draws. It is plain
-data like the rest of the scene: `body_sphere` is the sphere drawn for it, and
+A `Body` is a solid sphere, box or capsule that the physics module moves and every renderer
+draws. It is plain data like the rest of the scene: `body_node` is the object drawn for it, and
 `scene_model.scene` puts the bodies into a scene (`scene_objects`, `scene_at`). Stepping the
 world is the physics engine's job (physics/, driven by marchlab/simulation.py).
 """
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass
 from typing import Literal
 
 from .errors import SceneError
-from .fields import MAX_SPEED, POINT, SIZE, Each, Range, Record, Vec3, param, unit_interval
-from .shapes import Node, Sphere, Translate
+from .fields import (MAX_DEGREES, MAX_SPEED, POINT, SIZE, SIZES, Each, Range, Record, Vec3, param,
+                     unit_interval)
+from .shapes import Box, Capsule, Node, Rotate, Sphere, Translate
 
 # The names of the time-stepping schemes and contact solvers, here once: the scene format
 # accepts them, and physics.INTEGRATORS and physics.SOLVERS are keyed by them.
 INTEGRATOR_NAMES = ("semi_implicit", "explicit", "verlet")
 SOLVER_NAMES = ("sequential", "simultaneous")
+BODY_SHAPES = ("sphere", "box", "capsule")     # physics.solids.KIND_NAMES, in the same order
 Integrator = Literal[INTEGRATOR_NAMES]
 Solver = Literal[SOLVER_NAMES]
+BodyShape = Literal[BODY_SHAPES]
 
 # Ranges of the physical quantities (SI units), chosen so that every product the step forms
 # (m v, 1 / m, r^2 w) stays far inside float32's range, as the GPU step needs.
@@ -62,15 +64,25 @@ class PhysicsSettings(Record):
 
 @dataclass(frozen=True)
 class Body(Record):
-    """A dynamic solid sphere: moved by the physics step and drawn as a sphere."""
+    """A dynamic solid sphere, box or capsule: moved by the physics step and drawn as itself."""
+    shape: BodyShape = param("sphere", "Its shape: a sphere of ``radius``, a box of "
+                                       "``half_size``, or a capsule: the points within "
+                                       "``radius`` of a segment 2 ``half_length`` long along "
+                                       "its own y axis.")
     position: Vec3 = param((0.0, 1.0, 0.0), "Centre at t = 0 (m).", POINT)
     velocity: Vec3 = param((0.0, 0.0, 0.0), "Velocity at t = 0 (m/s).", VELOCITY)
     angular_velocity: Vec3 = param((0.0, 0.0, 0.0), "Angular velocity at t = 0 (rad/s).",
                                    VELOCITY)
-    radius: float = param(0.25, "Radius (m).", SIZE)
+    radius: float = param(0.25, "Radius (m) of a sphere or a capsule.", SIZE)
+    half_size: Vec3 = param((0.25, 0.25, 0.25), "Half the extent of a box along its own x, y, "
+                                                "z (m).", SIZES)
+    half_length: float = param(0.25, "Half the length of a capsule's segment (m).", SIZE)
+    rotation: Vec3 = param((0.0, 0.0, 0.0), "Orientation of a box or capsule at t = 0: Euler "
+                                            "angles in degrees, R = Rz Ry Rx as for rotate.",
+                           Each(Range(-MAX_DEGREES, MAX_DEGREES)))
     mass: float | None = param(None, "Mass (kg); absent: from density.", MASS)
-    density: float | None = param(None, "Density (kg/m^3), mass = 4/3 pi r^3 density; "
-                                         "absent: [physics] density.", DENSITY)
+    density: float | None = param(None, "Density (kg/m^3), mass = density times the "
+                                         "volume; absent: [physics] density.", DENSITY)
     restitution: float | None = param(None, "Coefficient of restitution e; absent: "
                                             "[physics] restitution.", unit_interval)
     friction: float | None = param(None, "Coefficient of friction mu; absent: "
@@ -82,8 +94,19 @@ class Body(Record):
             raise SceneError("give mass or density, not both", ("density",))
 
 
-def body_sphere(body: Body, position=None) -> Node:
-    """The object drawn for ``body``: a sphere of its radius translated to ``position``
-    (default: the body's own position)."""
+def body_node(body: Body, position=None, rotation=None) -> Node:
+    """The object drawn for ``body``: a sphere of its radius, or its box or capsule turned by
+    ``rotation`` (Euler degrees), translated to ``position`` (defaults: the body's own).
+
+    A sphere is drawn unturned (it looks the same), so its shader never changes; a box or
+    capsule always has its rotate node, so only numbers change from frame to frame."""
     centre = body.position if position is None else position
-    return Translate(Sphere(body.radius, material=body.material), centre)
+    if body.shape == "sphere":
+        return Translate(Sphere(body.radius, material=body.material), centre)
+    degrees = body.rotation if rotation is None else tuple(float(a) for a in rotation)
+    if body.shape == "box":
+        solid = Box(body.half_size, material=body.material)
+    else:
+        solid = Capsule((0.0, -body.half_length, 0.0), (0.0, body.half_length, 0.0),
+                        body.radius, material=body.material)
+    return Translate(Rotate(solid, degrees), centre)

@@ -70,14 +70,18 @@ def motion_velocity(motion: Motion, t: float, points: np.ndarray) -> np.ndarray:
 
 
 def euler_degrees(rotation: np.ndarray) -> tuple[float, float, float]:
-    """Euler angles (degrees) with R = Rz(z) Ry(y) Rx(x) (`geometry.rotation_matrix`)."""
-    y = math.asin(max(-1.0, min(1.0, -float(rotation[2, 0]))))
-    if abs(float(rotation[2, 0])) < 1 - 1e-12:
-        x = math.atan2(float(rotation[2, 1]), float(rotation[2, 2]))
-        z = math.atan2(float(rotation[1, 0]), float(rotation[0, 0]))
-    else:                                  # gimbal lock: only x - z (or x + z) is fixed
-        x = math.atan2(-float(rotation[1, 2]), float(rotation[1, 1]))
-        z = 0.0
+    """Euler angles (degrees) with R = Rz(z) Ry(y) Rx(x) (`geometry.rotation_matrix`).
+
+    Every angle comes from an atan2, never an asin, so none loses digits near y = +-90
+    degrees (asin(-R_20) there keeps only half of them), and z is found from x rather than
+    from R_00 and R_10, which both vanish at the lock (Day, "Extracting Euler angles from a
+    rotation matrix", Insomniac Games, 2012).
+    """
+    r = np.asarray(rotation, np.float64)
+    x = math.atan2(r[2, 1], r[2, 2])
+    y = math.atan2(-r[2, 0], math.hypot(r[0, 0], r[1, 0]))
+    sin_x, cos_x = math.sin(x), math.cos(x)
+    z = math.atan2(sin_x * r[0, 2] - cos_x * r[0, 1], cos_x * r[1, 1] - sin_x * r[1, 2])
     return tuple(math.degrees(a) for a in (x, y, z))
 
 

@@ -12,7 +12,7 @@ import math
 from dataclasses import dataclass
 from typing import ClassVar, Literal
 
-from .bodies import FRICTION, Body, PhysicsSettings, body_sphere
+from .bodies import FRICTION, Body, PhysicsSettings, body_node
 from .motion import Motion, posed_objects
 from .errors import SceneError
 from .fields import (DIRECTION, POINT, SIZE, Color, Range, Record, Vec3, color_range, number_text,
@@ -305,7 +305,7 @@ class Scene(Record):
 # --- Bodies in the scene ------------------------------------------------------------------
 
 def scene_objects(scene: Scene, positions=None) -> tuple[Node, ...]:
-    """The objects a renderer draws: the scene's objects, then one sphere per body.
+    """The objects a renderer draws: the scene's objects, then one object per body.
 
     The bodies come last, so the object id of every static object (its depth-first index)
     is the same with or without bodies.
@@ -320,11 +320,12 @@ def scene_objects(scene: Scene, positions=None) -> tuple[Node, ...]:
         positions = [None] * len(scene.bodies)
     elif len(positions) != len(scene.bodies):
         raise ValueError(f"expected {len(scene.bodies)} positions, got {len(positions)}")
-    return scene.objects + tuple(body_sphere(body, p) for body, p in zip(scene.bodies, positions))
+    return scene.objects + tuple(body_node(body, p) for body, p in zip(scene.bodies, positions))
 
 
-def scene_at(scene: Scene, positions, time: float | None = None) -> Scene:
-    """``scene`` with its bodies moved to ``positions`` ((N, 3), one row per body) and, at
+def scene_at(scene: Scene, positions, time: float | None = None, rotations=None) -> Scene:
+    """``scene`` with its bodies moved to ``positions`` ((N, 3), one row per body) and turned
+    to ``rotations`` ((N, 3) Euler degrees, optional: a box's or capsule's pose) and, at
     ``time`` (s), its kinematic objects where their motions have them (`motion.posed_objects`;
     the motions are then done with and dropped, so the result is a still).
 
@@ -333,8 +334,13 @@ def scene_at(scene: Scene, positions, time: float | None = None) -> Scene:
     """
     if len(positions) != len(scene.bodies):
         raise ValueError(f"expected {len(scene.bodies)} positions, got {len(positions)}")
-    bodies = tuple(dataclasses.replace(body, position=tuple(float(c) for c in p))
-                   for body, p in zip(scene.bodies, positions))
+    if rotations is None:
+        rotations = [body.rotation for body in scene.bodies]
+    elif len(rotations) != len(scene.bodies):
+        raise ValueError(f"expected {len(scene.bodies)} rotations, got {len(rotations)}")
+    bodies = tuple(dataclasses.replace(body, position=tuple(float(c) for c in p),
+                                       rotation=tuple(float(a) for a in turn))
+                   for body, p, turn in zip(scene.bodies, positions, rotations))
     if time is None or not scene.motions:
         return dataclasses.replace(scene, bodies=bodies)
     return dataclasses.replace(scene, bodies=bodies, motions=(),

@@ -119,7 +119,7 @@ SIZE_FIELDS = {"Sphere.radius", "Box.half_size", "RoundBox.half_size", "RoundBox
                "Torus.major_radius", "Torus.minor_radius", "CappedCylinder.radius",
                "CappedCylinder.half_height", "Capsule.radius", "Cone.radius", "Cone.height",
                "SmoothUnion.k", "SmoothIntersection.k", "SmoothSubtraction.k", "Scale.factor",
-               "Checker.scale", "Body.radius"}
+               "Checker.scale", "Body.radius", "Body.half_size", "Body.half_length"}
 
 
 def fields_checked_by(*checks) -> dict[str, tuple]:
