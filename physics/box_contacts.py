@@ -43,7 +43,7 @@ for a solver, so the manifold is not reduced to 4 as some engines do.
 Features. A solver that starts each step from the last step's impulses (warm starting; Catto,
 "Iterative dynamics with temporal coherence", GDC 2005) must know which new contact is which
 old one. Each contact gets a number built from what produced it, which stays the same while the
-boxes move a little:
+boxes move a little::
 
     face contact:  ((box * 6 + reference face) * 6 + incident face) * 24 + point
                    box 0 when a holds the reference face, 1 when b does; face 2k (+e_k) or

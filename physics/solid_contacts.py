@@ -4,7 +4,7 @@ A sphere's contact needs no point: it is always r n from the centre (contacts.py
 is wherever the two surfaces meet, so a contact here is a `PointContacts` row: the point p,
 the unit normal n from b to a, the gap along n (negative when they overlap), and the lever
 arms p - x_a and p - x_b that the solver turns into torque (point_solver.py). How each pair
-finds its points, the exact test where there is one, samples where there is not:
+finds its points, the exact test where there is one, samples where there is not::
 
     box-plane        the 8 corners: gap = n . c - offset                         exact
     capsule-plane    the 2 segment ends, spheres of the capsule's radius         exact
@@ -47,7 +47,8 @@ from physics.solids import (BOX, CAPSULE, CAPSULE_SAMPLES, KIND_NAMES, SPHERE, b
 from scene_model.geometry import dot
 
 FEATURES = 4096          # features per pair in a contact key (box_contacts stays below it)
-TERNARY_STEPS = 40       # halvings of the segment when looking for its point nearest a box
+SCAN_POINTS = 17         # points along a capsule's segment looked at first for its nearest
+TERNARY_STEPS = 24       # then this many steps, each keeping 2/3 of the bracket: 1e-5 of it
 END_SKIP = 0.01          # the nearest point within this fraction of an end: the end's contact
 
 
@@ -399,16 +400,18 @@ def _capsule_box(world, capsule, box, reach) -> dict:
         local = (start + np.asarray(t, dtype)[:, None] * (end - start) - x[box]) @ rotation
         return box_distance(local, np.broadcast_to(half, local.shape))
 
-    # The signed distance to a convex solid is convex, and so along a segment: a ternary
-    # search narrows [0, 1] to the nearest point.
-    low, high = 0.0, 1.0
+    # The signed distance to a convex solid is convex, and so along a segment: the least of a
+    # few samples brackets the nearest point, and a ternary search narrows the bracket.
+    scan = np.linspace(0, 1, SCAN_POINTS)
+    best = int(np.argmin(distance(scan)[0]))
+    low, high = scan[max(best - 1, 0)], scan[min(best + 1, SCAN_POINTS - 1)]
     for _ in range(TERNARY_STEPS):
         third = (high - low) / 3
-        m1, m2 = low + third, high - third
-        if distance([m1])[0][0] <= distance([m2])[0][0]:
-            high = m2
+        pair = distance([low + third, high - third])[0]
+        if pair[0] <= pair[1]:
+            high = high - third
         else:
-            low = m1
+            low = low + third
     middle = 0.5 * (low + high)
     t = np.array([0.0, 1.0] + ([middle] if END_SKIP < middle < 1 - END_SKIP else []))
     d, gradient = distance(t)

@@ -1,7 +1,7 @@
 """Bodies that are not spheres: boxes and capsules, their mass, inertia and distance functions.
 
 Every body of a `World` has a kind (`SPHERE`, `BOX`, `CAPSULE`) and, besides its radius, an
-``extent`` (3,) in its own frame:
+``extent`` (3,) in its own frame::
 
     sphere    radius r                      extent (0, 0, 0)
     box       half sizes (a, b, c)          extent (a, b, c); radius = |(a, b, c)|, the
@@ -17,7 +17,7 @@ a tumbling box's w wanders (a book thrown about its middle axis flips over, the
 "Dzhanibekov effect"), and `World.step` advances L, not w (docs/physics.md).
 
 The moments (solid, uniform density rho; any mechanics text, e.g. Goldstein, Classical
-Mechanics, 3rd ed., ch. 5):
+Mechanics, 3rd ed., ch. 5)::
 
     sphere    I = 2/5 m r^2 about every axis
     box       I_x = m (b^2 + c^2) / 3, and so on (m/12 of the full sizes squared)
