@@ -173,21 +173,24 @@ def solve_points(bodies: PointBodies, contacts, gravity_part, h, threshold, iter
     levels = colour_levels(a, b, len(bodies.velocity) - 1)
     counter["solver levels"] += len(levels)
     # Each level's rows, cut out once: a pass is then a few small products per level.
-    rows = [(level, a[level], b[level], jacobian_a[level], jacobian_b[level], image_a[level],
-             image_b[level], k[level], surface[level]) for level in levels]
+    # Each level's rows, cut out once: a pass is then a few small products per level. The two
+    # bodies of a contact are gathered as one 12-vector (v_a, w_a, v_b, w_b), so J is (3, 12).
+    rows = [(level, np.stack([a[level], b[level]], axis=1).reshape(-1),
+             np.concatenate([jacobian_a[level], jacobian_b[level]], axis=2),
+             np.concatenate([image_a[level], image_b[level]], axis=2), k[level],
+             surface[level]) for level in levels]
 
     def velocity(row):
         """J V (L, 3): the level's relative velocities along n, t1, t2 (m/s)."""
-        _, ia, ib, ja, jb, _, _, _, moving = row
-        return ((ja @ body_velocity[ia][:, :, None])[:, :, 0]
-                + (jb @ body_velocity[ib][:, :, None])[:, :, 0] - moving)
+        _, pair, jacobian, _, _, moving = row
+        gathered = body_velocity[pair].reshape(len(jacobian), 12, 1)
+        return (jacobian @ gathered)[:, :, 0] - moving
 
     def push(row, change):
         """Apply impulses ``change`` (L, 3) along n, t1, t2. Within a level no moving body
         repeats; the static row may, but its images are 0."""
-        _, ia, ib, _, _, wa, wb, _, _ = row
-        body_velocity[ia] += (change[:, None, :] @ wa)[:, 0, :]
-        body_velocity[ib] += (change[:, None, :] @ wb)[:, 0, :]
+        _, pair, _, image, _, _ = row
+        body_velocity[pair] += (change[:, None, :] @ image).reshape(len(pair), 6)
 
     approach = np.zeros(len(a), body_velocity.dtype)
     for row in rows:
@@ -203,7 +206,7 @@ def solve_points(bodies: PointBodies, contacts, gravity_part, h, threshold, iter
         counter["resting passes"] += 1
         change = 0.0
         for row in rows:
-            level, kl = row[0], row[7]
+            level, kl = row[0], row[4]
             v = velocity(row)
             old = total[level]
             new = old - v / kl
@@ -228,7 +231,7 @@ def solve_points(bodies: PointBodies, contacts, gravity_part, h, threshold, iter
         counter["restitution passes"] += 1
         change = 0.0
         for row in bouncing:
-            level, kl = row[0], row[7]
+            level, kl = row[0], row[4]
             wanted = contacts.restitution[level] * approach[level]
             old = total[level, 0]
             new = np.where(bounce[level],
