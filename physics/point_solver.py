@@ -53,14 +53,16 @@ import numpy as np
 
 from physics.impulses import cross
 # m/s: passes stop once none changes a contact's velocity by more than this. Looser than the
-# sphere solver's 1e-9 (solvers.SETTLED): a box's corners reach 1e-9 only after tens of
-# passes, and 1e-7 m/s for a step moves a body 4e-10 m; a settled stack then needs one pass.
+# sphere solver's 1e-9 (solvers.SETTLED): a box's corners share its weight in any proportion,
+# and Gauss-Seidel goes on shifting the share among them by about 1e-7 m/s a pass long after
+# the velocities are right (1e-7 m/s for a step moves a body 4e-10 m). docs/performance.md
+# measures what the passes cost.
 SETTLED = 1e-7
 
 # Passes per iteration of the world: a box's four corner contacts pull against each other
 # through its rotation, and need more passes to agree than a ball's single contact (10 passes
 # left a 5-box stack creeping 0.2 mm a second and a capsule on a box rolling off; 40 settle
-# both to 1e-10, and a settled stack stops after about 17).
+# both to 1e-10).
 PASSES_PER_ITERATION = 4
 from scene_model.geometry import dot
 
