@@ -97,8 +97,10 @@ def bullet_stepper(count: int):
     return step
 
 
-def seconds_per_step(step, seconds: float) -> float:
-    step(round(WARM_UP / DT))
+def seconds_per_step(step, seconds: float, warm_up: float = WARM_UP) -> float:
+    """Seconds of computing per step of ``step(n)``, timed over ``seconds`` of simulated time
+    after ``warm_up`` (both at dt = 1/240 s)."""
+    step(round(warm_up / DT))
     steps = max(1, round(seconds / DT))
     start = time.perf_counter()
     step(steps)

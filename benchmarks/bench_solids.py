@@ -25,13 +25,13 @@ import argparse
 import os
 import platform
 import sys
-import time
 
 import numpy as np
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
 
 import physics  # noqa: E402
+from bench_pybullet import seconds_per_step  # noqa: E402  (the same timing, dt = 1/240 s)
 from bench_render import cpu_name  # noqa: E402
 from physics.quaternions import quaternion_from_rotation_vector  # noqa: E402
 
@@ -96,14 +96,6 @@ def bullet_stepper(centre, turn):
     return step
 
 
-def seconds_per_step(step, warm_up: float, seconds: float) -> float:
-    step(round(warm_up / DT))
-    steps = max(1, round(seconds / DT))
-    start = time.perf_counter()
-    step(steps)
-    return (time.perf_counter() - start) / steps
-
-
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--piles", type=int, nargs="+", default=[10, 30])
@@ -121,8 +113,8 @@ def main(argv=None) -> None:
     cases = [("stack (at rest)", 1.0, stack_boxes())]
     cases += [("pile (falling)", 0.25, pile_boxes(count)) for count in args.piles]
     for name, warm_up, (centre, turn) in cases:
-        ours = seconds_per_step(marchlab_stepper(centre, turn), warm_up, args.seconds)
-        theirs = (seconds_per_step(bullet_stepper(centre, turn), warm_up, args.seconds)
+        ours = seconds_per_step(marchlab_stepper(centre, turn), args.seconds, warm_up)
+        theirs = (seconds_per_step(bullet_stepper(centre, turn), args.seconds, warm_up)
                   if bullet else float("nan"))
         print(f"| {name} | {len(centre)} | {ours * 1e3:.2f} | {theirs * 1e3:.3f} | "
               f"{ours / theirs:.0f}x |", flush=True)
