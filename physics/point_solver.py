@@ -134,8 +134,19 @@ def colour_levels(a, b, static: int) -> list:
     return [np.flatnonzero(colour == c) for c in range(colour.max() + 1)] if len(colour) else []
 
 
+def visiting_order(point, gravity) -> np.ndarray:
+    """The order (K,) in which the passes visit the contacts: highest point first, along
+    -``gravity``, ties (and a world without gravity) in key order.
+
+    In a stack the weight of each box then reaches the contact under it within the same
+    pass, top to bottom, instead of climbing one contact a pass: a resting five-box stack
+    settles in one pass a step instead of 10-18 (docs/performance.md).
+    """
+    return np.argsort(point @ np.asarray(gravity, point.dtype), kind="stable")
+
+
 def solve_points(bodies: PointBodies, contacts, gravity_part, h, threshold, iterations, warm,
-                 counter=None):
+                 counter=None, gravity=(0.0, 0.0, 0.0)):
     """Sequential impulses at contact points. Updates ``bodies`` in place.
 
     Parameters
@@ -159,6 +170,8 @@ def solve_points(bodies: PointBodies, contacts, gravity_part, h, threshold, iter
         step's for the contacts that persist. Updated in place to this step's.
     counter : collections.Counter, optional
         Gets ``"resting passes"``, ``"restitution passes"`` and ``"solver levels"`` added.
+    gravity : (3,) array_like
+        The contacts are visited from the highest (along -gravity) down: see `visiting_order`.
 
     Returns
     -------
@@ -172,7 +185,9 @@ def solve_points(bodies: PointBodies, contacts, gravity_part, h, threshold, iter
     jacobian_a, jacobian_b, image_a, image_b, k = jacobians(bodies, contacts, directions)
     surface = np.einsum("kdj,kj->kd", directions, contacts.surface_velocity)
     body_velocity = np.concatenate([bodies.velocity, bodies.spin], axis=1)   # (N + 1, 6)
-    levels = colour_levels(a, b, len(bodies.velocity) - 1)
+    order = visiting_order(contacts.point, gravity)
+    levels = [order[level] for level in colour_levels(a[order], b[order],
+                                                      len(bodies.velocity) - 1)]
     counter["solver levels"] += len(levels)
     # Each level's rows, cut out once: a pass is then a few small products per level.
     # Each level's rows, cut out once: a pass is then a few small products per level. The two

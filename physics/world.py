@@ -526,7 +526,7 @@ class World:
         warm = warm_start(every.key, self._resting_impulses, self.dtype)
         collisions = solve_points(points, every, gravity_part.astype(self.dtype), h,
                                   self.restitution_threshold, self.iterations, warm,
-                                  counter=work)
+                                  counter=work, gravity=self.gravity)
         self._resting_impulses = (every.key, warm[0], warm[1])
         work["contacts"] = len(every)
         return every, collisions
