@@ -22,10 +22,10 @@ import numpy as np
 from physics import PhysicsError
 import physics
 from physics.errors import choice
-from physics.quaternions import quaternion_from_matrix, rotation_matrices
+from physics.quaternions import rotation_matrices
 from scene_model.bodies import PhysicsSettings
 from scene_model.errors import MarchlabError, SceneError
-from scene_model.geometry import rotation_matrix
+from scene_model.geometry import quaternion_from_matrix, rotation_matrix
 from scene_model.motion import euler_degrees
 from scene_model.scene import Scene
 

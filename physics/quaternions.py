@@ -51,26 +51,3 @@ def rotation_matrices(orientation: np.ndarray) -> np.ndarray:
         np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], axis=1),
     ], axis=1)
 
-
-def quaternion_from_matrix(rotation: np.ndarray) -> np.ndarray:
-    """The unit quaternion (4,) (w, x, y, z) of a rotation matrix (3, 3), with w >= 0.
-
-    Shepperd's method ("Quaternion from rotation matrix", J. Guidance and Control 1, 1978):
-    of 4w^2 = 1 + trace and 4x^2 = 1 + 2 R_xx - trace (and so on), take the root of the
-    largest, which is never small, and the other three components from the off-diagonal
-    sums and differences divided by it.
-    """
-    r = np.asarray(rotation, np.float64)
-    trace = r[0, 0] + r[1, 1] + r[2, 2]
-    squares = np.array([1 + trace, 1 + 2 * r[0, 0] - trace, 1 + 2 * r[1, 1] - trace,
-                        1 + 2 * r[2, 2] - trace])
-    largest = int(np.argmax(squares))
-    s = 2 * np.sqrt(squares[largest])           # 4 times that component
-    w_x_y_z = {
-        0: (s / 4, (r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s),
-        1: ((r[2, 1] - r[1, 2]) / s, s / 4, (r[0, 1] + r[1, 0]) / s, (r[0, 2] + r[2, 0]) / s),
-        2: ((r[0, 2] - r[2, 0]) / s, (r[0, 1] + r[1, 0]) / s, s / 4, (r[1, 2] + r[2, 1]) / s),
-        3: ((r[1, 0] - r[0, 1]) / s, (r[0, 2] + r[2, 0]) / s, (r[1, 2] + r[2, 1]) / s, s / 4),
-    }[largest]
-    q = np.array(w_x_y_z)
-    return q if q[0] >= 0 else -q

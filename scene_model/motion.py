@@ -1,16 +1,26 @@
 """Kinematic objects: static objects of the scene moved along a prescribed path over time.
 
-A `Motion` names one top-level object of ``objects`` and moves it: turned at the constant
-angular velocity ``spin`` about ``pivot``, and moved back and forth by
-``amplitude sin(2 pi t / period)``. The object's points go at time t from x to
+A `Motion` names one top-level object of ``objects`` and moves it. The object's points go at
+time t from x to
 
-    x(t) = R(t) (x - pivot) + pivot + s(t),    s(t) = amplitude sin(2 pi t / period),
+    x(t) = R(t) (x - pivot) + pivot + s(t),
 
-with R(t) the turn by the angle |spin| t about the axis spin / |spin| (Rodrigues' formula).
+a turn R(t) about the pivot and a shift s(t), given one of two ways:
+
+* **constant**: R(t) the turn by the angle |spin| t about the axis spin / |spin|
+  (Rodrigues' formula), and s(t) = amplitude sin(2 pi t / period);
+* **keyframed**: a pose (``offsets``, ``turns``) at each of the key ``times``, and in between
+  the shift interpolated and the turn carried from one key's to the next's about the single
+  axis that joins them (spherical linear interpolation, Shoemake, "Animating rotation with
+  quaternion curves", SIGGRAPH 1985), at the rate the ``interpolation`` gives: ``linear``
+  (constant velocity along each segment) or ``smoothstep`` (3u^2 - 2u^3 of the segment's
+  fraction u: starting and stopping at rest at each key). Before the first key the object
+  holds the first pose; after the last, the last, or with ``loop`` it starts over.
+
 The physics step collides the bodies with the object where it is and gives them its surface
-velocity, v(x) = w x (x - pivot - s(t)) + s'(t) (a paddle, a turntable, a moving platform);
-nothing pushes it back. The renderers draw it where it is (`posed_objects`). Plain data and
-plain maths: no engine.
+velocity, v(x) = w x (x - pivot - s(t)) + s'(t) (a paddle, a turntable, a moving platform),
+with w the angular velocity of R(t); nothing pushes it back. The renderers draw it where it
+is (`posed_objects`). Plain data and plain maths: no engine.
 """
 
 from __future__ import annotations
@@ -20,10 +30,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .fields import POINT, Each, Range, Record, Vec3, param
+from typing import Literal
+
+from .errors import SceneError
+from .fields import MAX_DEGREES, POINT, Each, Range, Record, Rule, Vec3, param
+from .geometry import axis_angle_matrix, rotation_matrix, rotation_vector
 from .shapes import Node, Rotate, Translate
 
 MAX_SPIN = 36000.0           # degrees per second: 100 turns a second
+MAX_KEY_TIME = 1e6           # s: the latest key time, as the longest period
+MIN_KEY_GAP = 1e-3           # s: keys closer than this would need a speed beyond any step
+MAX_OFFSET = 1e3             # m: as the amplitude
 
 
 @dataclass(frozen=True)
@@ -41,20 +58,58 @@ class Motion(Record):
                                               "motion (m).", Each(Range(-1e3, 1e3)))
     period: float = param(1.0, "Period of the back-and-forth motion (s).",
                           Range(1e-3, 1e6, positive=True))
+    times: tuple[float, ...] = param((), "Key times (s), increasing, at least "
+                                         f"{MIN_KEY_GAP:g} s apart; empty: no keyframes.",
+                                     Rule(lambda v: all(0 <= t <= MAX_KEY_TIME for t in v),
+                                          f"must be between 0 and {MAX_KEY_TIME:g} s",
+                                          f"each in [0, {MAX_KEY_TIME:g}]"))
+    offsets: tuple[Vec3, ...] = param((), "The shift s at each key time (m); empty: none.",
+                                      Rule(lambda v: all(abs(c) <= MAX_OFFSET for p in v
+                                                         for c in p),
+                                           f"components must be within +-{MAX_OFFSET:g} m",
+                                           f"each in [-{MAX_OFFSET:g}, {MAX_OFFSET:g}]"))
+    turns: tuple[Vec3, ...] = param((), "The turn about the pivot at each key time, Euler "
+                                        "angles in degrees (R = Rz Ry Rx, as rotate); "
+                                        "empty: none.",
+                                    Rule(lambda v: all(abs(c) <= MAX_DEGREES for p in v
+                                                       for c in p),
+                                         f"angles must be within +-{MAX_DEGREES:g} degrees",
+                                         f"each in [-{MAX_DEGREES:g}, {MAX_DEGREES:g}]"))
+    interpolation: Literal["linear", "smoothstep"] = param(
+        "linear", "Between keys: constant velocity, or smoothstep (at rest at every key).")
+    loop: bool = param(False, "After the last key start over from the first (the keys then "
+                              "repeat every last - first seconds); otherwise hold the last "
+                              "pose.")
+
+    def check(self):
+        if not self.times:
+            for name in ("offsets", "turns"):
+                if getattr(self, name):
+                    raise SceneError("needs key times: give times as well", (name,))
+            return
+        for name in ("offsets", "turns"):
+            given = len(getattr(self, name))
+            if given not in (0, len(self.times)):
+                raise SceneError(f"must have one value per key time ({len(self.times)}), or "
+                                 f"none (got {given})", (name,))
+        for index, (early, late) in enumerate(zip(self.times, self.times[1:])):
+            if late - early < MIN_KEY_GAP:
+                raise SceneError(f"must increase by at least {MIN_KEY_GAP:g} s from key to "
+                                 f"key (got {early!r} then {late!r})", ("times", index + 1))
+        for name in ("spin", "amplitude"):
+            if any(getattr(self, name)):
+                raise SceneError("a keyframed motion has no constant spin or oscillation: "
+                                 "give its turns and offsets at the keys instead", (name,))
+        if self.loop and len(self.times) < 2:
+            raise SceneError("a loop needs at least two key times", ("loop",))
 
 
 def motion_pose(motion: Motion, t: float) -> tuple[np.ndarray, np.ndarray]:
     """R(t) (3, 3) and s(t) (3,) of ``motion`` at time ``t`` (s), float64."""
-    w = np.radians(np.asarray(motion.spin, np.float64))
-    angle = math.sqrt(float(w @ w)) * t
-    if angle == 0:
-        rotation = np.eye(3)
-    else:
-        # Rodrigues: R = I + sin(a) K + (1 - cos(a)) K^2, K the cross-product matrix of the
-        # unit axis.
-        k = w / math.sqrt(float(w @ w))
-        cross = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
-        rotation = np.eye(3) + math.sin(angle) * cross + (1 - math.cos(angle)) * cross @ cross
+    if motion.times:
+        rotation, shift, _, _ = _keyframed(motion, t)
+        return rotation, shift
+    rotation = axis_angle_matrix(np.radians(np.asarray(motion.spin, np.float64)) * t)
     shift = np.asarray(motion.amplitude, np.float64) * math.sin(2 * math.pi * t / motion.period)
     return rotation, shift
 
@@ -62,11 +117,44 @@ def motion_pose(motion: Motion, t: float) -> tuple[np.ndarray, np.ndarray]:
 def motion_velocity(motion: Motion, t: float, points: np.ndarray) -> np.ndarray:
     """Velocity (K, 3) in m/s at time ``t`` of the object's points now at ``points`` (K, 3):
     w x (x - pivot - s(t)) + s'(t)."""
-    w = np.radians(np.asarray(motion.spin, np.float64))
-    _, shift = motion_pose(motion, t)
+    if motion.times:
+        _, shift, w, shift_rate = _keyframed(motion, t)
+    else:
+        w = np.radians(np.asarray(motion.spin, np.float64))
+        _, shift = motion_pose(motion, t)
+        omega = 2 * math.pi / motion.period
+        shift_rate = np.asarray(motion.amplitude) * omega * math.cos(omega * t)
     arm = np.asarray(points, np.float64) - np.asarray(motion.pivot) - shift
-    omega = 2 * math.pi / motion.period
-    return np.cross(w, arm) + np.asarray(motion.amplitude) * omega * math.cos(omega * t)
+    return np.cross(w, arm) + shift_rate
+
+
+def _keyframed(motion: Motion, t: float):
+    """R(t), s(t), the angular velocity w(t) (rad/s, world frame) and s'(t) of a keyframed
+    motion (the module docstring)."""
+    times = motion.times
+    if motion.loop:
+        t = times[0] + (t - times[0]) % (times[-1] - times[0]) if t > times[-1] else t
+    count = len(times)
+    offsets = np.asarray(motion.offsets or [(0.0, 0.0, 0.0)] * count, np.float64)
+    turns = [rotation_matrix(turn) for turn in (motion.turns or [(0.0, 0.0, 0.0)] * count)]
+    still = np.zeros(3)
+    if t <= times[0] or count == 1:
+        return turns[0], offsets[0], still, still
+    if t >= times[-1]:
+        return turns[-1], offsets[-1], still, still
+    i = int(np.searchsorted(times, t, side="right")) - 1
+    span = times[i + 1] - times[i]
+    u = (t - times[i]) / span
+    if motion.interpolation == "smoothstep":
+        weight, rate = u * u * (3 - 2 * u), 6 * u * (1 - u) / span
+    else:
+        weight, rate = u, 1 / span
+    # The turn from key i to key i + 1 is one rotation about a fixed axis, R_{i+1} R_i^T =
+    # exp(r): carrying the fraction ``weight`` of it is slerp, at the angular velocity r rate.
+    between = rotation_vector(turns[i + 1] @ turns[i].T)
+    rotation = axis_angle_matrix(weight * between) @ turns[i]
+    step = offsets[i + 1] - offsets[i]
+    return rotation, offsets[i] + weight * step, between * rate, step * rate
 
 
 def euler_degrees(rotation: np.ndarray) -> tuple[float, float, float]:

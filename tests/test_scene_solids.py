@@ -19,10 +19,10 @@ import marchlab
 import physics
 from marchlab.cli import main
 from marchlab.simulation import body_rotations, build_world, simulate
-from physics.quaternions import quaternion_from_matrix, rotation_matrices
+from physics.quaternions import rotation_matrices
 from physics.solids import box_distance, segment_closest
 from scene_model.builder import Body, Camera, Material, PhysicsSettings, Scene, plane
-from scene_model.geometry import rotation_matrix
+from scene_model.geometry import quaternion_from_matrix, rotation_matrix
 from scene_model.scene import rendered_scene, scene_at
 from scene_model.shapes import Box, Capsule, primitives
 from scene_model.scenefile import load_scene

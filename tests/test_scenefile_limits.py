@@ -11,6 +11,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import tomllib
+import types
 import typing
 
 import numpy as np
@@ -253,12 +254,25 @@ def test_a_quoted_number_is_refused_for_every_number_of_the_bundled_scenes(name,
     assert message.split(": ")[1].startswith(field.split(".")[0])
 
 
+def _quoted(hint):
+    """A value of the shape ``hint`` asks for with "50" for every number: "50", a tuple of
+    them, or one such tuple in a list of them (``tuple[Vec3, ...]``, keyframes)."""
+    args = [a for a in typing.get_args(hint) if a is not type(None)]
+    if typing.get_origin(hint) is tuple:
+        if len(args) == 2 and args[1] is Ellipsis:
+            return (_quoted(args[0]),)
+        return tuple(_quoted(a) for a in args)
+    if typing.get_origin(hint) in (typing.Union, types.UnionType):
+        return _quoted(args[0])
+    return "50"
+
+
 def test_a_quoted_number_is_refused_for_every_number_field_of_every_class():
     for cls in record_classes():
         hints = typing.get_type_hints(cls)
         for f in dataclasses.fields(cls):
             if _holds_numbers(hints[f.name]):
-                value = ("50", "50", "50") if _is_vector(hints[f.name]) else "50"
+                value = _quoted(hints[f.name])
                 with pytest.raises(SceneError) as caught:
                     make(cls, **{f.name: value})
                 assert caught.value.path[0] == f.name
