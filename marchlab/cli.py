@@ -19,8 +19,8 @@ from scene_model.camera import MAX_SIDE
 from scene_model.errors import MarchlabError
 from scene_model.frame import AOVS
 
-from .commands import (cmd_bench_accuracy, cmd_compare, cmd_render, cmd_scenes, cmd_shader,
-                       cmd_show, cmd_simulate, cmd_truth, cmd_view)
+from .commands import (cmd_animate, cmd_bench_accuracy, cmd_compare, cmd_render, cmd_scenes,
+                       cmd_shader, cmd_show, cmd_simulate, cmd_truth, cmd_view)
 from .doctor import add_parser as add_doctor_parser
 from .render import BACKENDS, PRECISIONS
 
@@ -30,6 +30,36 @@ DASHED_VALUE_OPTIONS = ("--size", "--seconds", "--fps", "--resolution")
 TRUTH_METHODS = ("analytic", "embree")
 MAX_RESOLUTION = 512    # a 517^3 float64 grid is already 1.1 GB
 
+
+def add_animation_parser(sub, name: str, func, text: str) -> None:
+    """``marchlab simulate`` and ``marchlab animate``: the same options, one path (a scene
+    without bodies simply has none to step)."""
+    p = sub.add_parser(name, help=text)
+    p.add_argument("scene", help="bundled scene name (e.g. bounce) or a .toml path")
+    p.add_argument("-o", "--output", help="output file, .gif or .mp4 (default: SCENE.gif)")
+    p.add_argument("--seconds", type=positive_number, default=5.0,
+                   help="length of the animation in seconds of scene time (default: 5)")
+    p.add_argument("--fps", type=positive_number, default=30.0,
+                   help="frames per second of the animation (default: 30); the physics "
+                        "time step stays the scene's [physics] dt")
+    p.add_argument("--size", type=parse_size, default=(320, 240), metavar="WxH",
+                   help="frame size in pixels (default: 320x240)")
+    p.add_argument("--backend", choices=list(BACKENDS), default=None,
+                   help="renderer (default: gpu if it can run here, else numpy)")
+    p.add_argument("--csv", metavar="FILE",
+                   help="also write the trajectory: one row per frame and body")
+    p.add_argument("--save-state", metavar="FILE",
+                   help="also write the world's full state at the last frame to FILE (.npz): "
+                        "positions, velocities, spins, time, random generator, warm start")
+    p.add_argument("--load-state", metavar="FILE",
+                   help="start from a state saved with --save-state for the same scene "
+                        "instead of the scene's bodies; the run carries on bit for bit, its "
+                        "frames and CSV times starting at the saved time")
+    p.add_argument("--set", action="extend", nargs="+", default=[], metavar="FIELD=VALUE",
+                   help="override scene fields, e.g. --set physics.dt=0.001 "
+                        "bodies[0].restitution=0.9")
+    add_allow_large(p)
+    p.set_defaults(func=func)
 
 def add_allow_large(parser) -> None:
     """The ``--allow-large`` flag of every command that estimates its work first."""
@@ -168,33 +198,13 @@ def build_parser() -> Parser:
     add_allow_large(p)
     p.set_defaults(func=cmd_compare)
 
-    p = sub.add_parser("simulate", help="step a scene's [[bodies]] with the physics module and "
-                                        "render them into an animated GIF (or .mp4)")
-    p.add_argument("scene", help="bundled scene name (e.g. bounce) or a .toml path")
-    p.add_argument("-o", "--output", help="output file, .gif or .mp4 (default: SCENE.gif)")
-    p.add_argument("--seconds", type=positive_number, default=5.0,
-                   help="simulated time in seconds (default: 5)")
-    p.add_argument("--fps", type=positive_number, default=30.0,
-                   help="frames per second of the animation (default: 30); the physics "
-                        "time step stays the scene's [physics] dt")
-    p.add_argument("--size", type=parse_size, default=(320, 240), metavar="WxH",
-                   help="frame size in pixels (default: 320x240)")
-    p.add_argument("--backend", choices=list(BACKENDS), default=None,
-                   help="renderer (default: gpu if it can run here, else numpy)")
-    p.add_argument("--csv", metavar="FILE",
-                   help="also write the trajectory: one row per frame and body")
-    p.add_argument("--save-state", metavar="FILE",
-                   help="also write the world's full state at the last frame to FILE (.npz): "
-                        "positions, velocities, spins, time, random generator, warm start")
-    p.add_argument("--load-state", metavar="FILE",
-                   help="start from a state saved with --save-state for the same scene "
-                        "instead of the scene's bodies; the run carries on bit for bit, its "
-                        "frames and CSV times starting at the saved time")
-    p.add_argument("--set", action="extend", nargs="+", default=[], metavar="FIELD=VALUE",
-                   help="override scene fields, e.g. --set physics.dt=0.001 "
-                        "bodies[0].restitution=0.9")
-    add_allow_large(p)
-    p.set_defaults(func=cmd_simulate)
+    for name, func, text in (
+            ("simulate", cmd_simulate, "step a scene's [[bodies]] with the physics module and "
+                                       "render them into an animated GIF (or .mp4)"),
+            ("animate", cmd_animate, "render a scene over time into an animated GIF (or "
+                                     ".mp4): its [[keyframes]], [orbit], kinematic objects "
+                                     "and bodies, any backend")):
+        add_animation_parser(sub, name, func, text)
 
     p = sub.add_parser("truth", help="compute a scene's ground truth without sphere tracing "
                                      "(depth, normal and hit images to an .npz file)")

@@ -24,7 +24,9 @@ from pathlib import Path
 from scene_model.errors import MarchlabError, SceneError
 from scene_model.files import write_together
 from scene_model.scene import rendered_scene, scene_at
-from scene_model.scenefile import bundled_scene_names, load_scene, scene_to_toml
+from scene_model.scenefile import bundled_scene_names, scene_to_toml
+from scene_model.scenefile import load_scene as read_scene
+from scene_model.timeline import check_keyframes
 
 from .budget import (COMMAND_LINE, MAX_BENCH_RAY_STEPS, check, check_animation, check_image,
                      check_render, check_truth)
@@ -178,8 +180,31 @@ def cmd_compare(args) -> int:
     return 1 if failed else 0
 
 
+def load_scene(name_or_path, overrides=()):
+    """`scene_model.scenefile.load_scene`, then its keyframes checked against the fields they
+    animate (`scene_model.timeline.check_keyframes`), errors naming the file."""
+    scene = read_scene(name_or_path, overrides)
+    try:
+        return check_keyframes(scene)
+    except SceneError as err:
+        raise err.in_file(str(name_or_path)) from None
+
+
 def cmd_simulate(args) -> int:
-    """``marchlab simulate``: step the scene's bodies, render each frame, write a GIF or MP4.
+    """``marchlab simulate``: step the scene's bodies, render each frame, write a GIF or MP4
+    (`animate_scene`; the scene must have bodies)."""
+    return animate_scene(args, need_bodies=True)
+
+
+def cmd_animate(args) -> int:
+    """``marchlab animate``: render the scene over time, its keyframes, orbit, kinematic
+    objects and bodies (if any), into a GIF or MP4 (`animate_scene`)."""
+    return animate_scene(args, need_bodies=False)
+
+
+def animate_scene(args, need_bodies: bool) -> int:
+    """Step the scene's bodies (none is fine unless ``need_bodies``), render each frame at its
+    time (`scene_model.timeline.scene_at_time` and the bodies' poses), write a GIF or MP4.
 
     Every output and the budget (frames, physics steps, the frames' memory and rendering)
     are checked before the first step; the animation, the CSV and the saved state
@@ -202,8 +227,9 @@ def cmd_simulate(args) -> int:
     state = Path(args.save_state) if args.save_state else None
     check_outputs(files=[output, table, state])
     scene = load_scene(args.scene, args.set)
-    if not scene.bodies:
-        raise MarchlabError(f"{args.scene}: has no [[bodies]] to simulate")
+    if need_bodies and not scene.bodies:
+        raise MarchlabError(f"{args.scene}: has no [[bodies]] to simulate (marchlab animate "
+                            "renders a scene without them)")
     backend = args.backend or ("gpu" if backend_problem("gpu") is None else "numpy")
     if args.backend and backend_problem(backend):
         raise MarchlabError(f"the {backend} backend cannot run here: {backend_problem(backend)}")
@@ -335,6 +361,7 @@ def render_frames(scene, positions, width: int, height: int, backend: str,
     Only numbers change from frame to frame, so the GPU backend compiles its program for the
     first frame and reuses it for the others.
     """
+    from scene_model.timeline import scene_at_time
     from .simulation import body_rotations
     images = []
     times = [None] * len(positions) if times is None else times
@@ -342,7 +369,10 @@ def render_frames(scene, positions, width: int, height: int, backend: str,
         for index, centres in enumerate(positions):
             rotations = (None if orientations is None
                          else body_rotations(orientations[index]))
-            frame = render(scene_at(scene, centres, times[index], rotations), width, height,
+            still = scene_at(scene, centres, times[index], rotations)
+            if times[index] is not None:
+                still = scene_at_time(still, times[index])
+            frame = render(still, width, height,
                            backend=backend, allow_large=allow_large)
             images.append(frame.image("color"))
             if progress:

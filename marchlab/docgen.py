@@ -15,6 +15,7 @@ from pathlib import Path
 
 from scene_model.bodies import Body, PhysicsSettings
 from scene_model.motion import Motion
+from scene_model.keyframes import Keyframes, Orbit
 from scene_model.fields import field_types, show
 from scene_model.scene import (Background, Camera, Checker, Fog, Light, Material, RenderSettings,
                                Scene)
@@ -107,6 +108,8 @@ def reference() -> str:
     out += section("`[physics]`", PhysicsSettings)
     out += section("`[[bodies]]`", Body)
     out += section("`[[motions]]`", Motion)
+    out += section("`[[keyframes]]`", Keyframes)
+    out += section("`[orbit]`", Orbit)
     out.append(END)
     return "\n".join(out) + "\n"
 

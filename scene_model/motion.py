@@ -35,6 +35,7 @@ from typing import Literal
 from .errors import SceneError
 from .fields import MAX_DEGREES, POINT, Each, Range, Record, Rule, Vec3, param
 from .geometry import axis_angle_matrix, rotation_matrix, rotation_vector
+from .keyframes import key_fraction
 from .shapes import Node, Rotate, Translate
 
 MAX_SPIN = 36000.0           # degrees per second: 100 turns a second
@@ -131,24 +132,12 @@ def motion_velocity(motion: Motion, t: float, points: np.ndarray) -> np.ndarray:
 def _keyframed(motion: Motion, t: float):
     """R(t), s(t), the angular velocity w(t) (rad/s, world frame) and s'(t) of a keyframed
     motion (the module docstring)."""
-    times = motion.times
-    if motion.loop:
-        t = times[0] + (t - times[0]) % (times[-1] - times[0]) if t > times[-1] else t
-    count = len(times)
+    count = len(motion.times)
     offsets = np.asarray(motion.offsets or [(0.0, 0.0, 0.0)] * count, np.float64)
     turns = [rotation_matrix(turn) for turn in (motion.turns or [(0.0, 0.0, 0.0)] * count)]
-    still = np.zeros(3)
-    if t <= times[0] or count == 1:
-        return turns[0], offsets[0], still, still
-    if t >= times[-1]:
-        return turns[-1], offsets[-1], still, still
-    i = int(np.searchsorted(times, t, side="right")) - 1
-    span = times[i + 1] - times[i]
-    u = (t - times[i]) / span
-    if motion.interpolation == "smoothstep":
-        weight, rate = u * u * (3 - 2 * u), 6 * u * (1 - u) / span
-    else:
-        weight, rate = u, 1 / span
+    i, weight, rate = key_fraction(motion.times, t, motion.interpolation, motion.loop)
+    if weight == 0 and rate == 0:                       # before the first key or after the last
+        return turns[i], offsets[i], np.zeros(3), np.zeros(3)
     # The turn from key i to key i + 1 is one rotation about a fixed axis, R_{i+1} R_i^T =
     # exp(r): carrying the fraction ``weight`` of it is slerp, at the angular velocity r rate.
     between = rotation_vector(turns[i + 1] @ turns[i].T)

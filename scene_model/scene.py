@@ -14,6 +14,7 @@ from typing import ClassVar, Literal
 
 from .bodies import FRICTION, Body, PhysicsSettings, body_node
 from .motion import Motion, posed_objects
+from .keyframes import Keyframes, Orbit
 from .errors import SceneError
 from .fields import (DIRECTION, POINT, SIZE, Color, Range, Record, Vec3, color_range, number_text,
                      param, unit_interval)
@@ -248,6 +249,10 @@ class Scene(Record):
     bodies: tuple[Body, ...] = param((), "Dynamic spheres, simulated and drawn.")
     motions: tuple[Motion, ...] = param((), "Kinematic objects: objects moved along a "
                                             "prescribed path, which push the bodies.")
+    keyframes: tuple[Keyframes, ...] = param((), "Animated fields: any number or 3-vector "
+                                                  "of the scene, given at key times.")
+    orbit: Orbit | None = param(None, "The camera turning about what it looks at; absent: "
+                                      "it stays.")
 
     def _repr_html_(self) -> str:
         """A notebook shows a scene as a short summary (its objects as a tree, its lights and

@@ -294,10 +294,12 @@ def scene_to_toml(scene: Scene) -> str:
     data = scene_to_dict(scene)
     doc = tomlkit.document()
     doc.add(tomlkit.comment("marchlab scene (docs/scene-format.md describes every field)"))
+    lists = ("bodies", "motions", "keyframes")
     for key in ("description", "camera", "render", "physics", "materials", "lights", "objects",
-                "motions", "bodies"):
-        # A scene without bodies or motions is saved without ``bodies = []``, as it was before.
-        if key in data and not (key in ("bodies", "motions") and not data[key]):
+                "motions", "bodies", "orbit", "keyframes"):
+        # A scene without bodies, motions or keyframes is saved without ``bodies = []``, as it
+        # was before they existed.
+        if key in data and data[key] is not None and not (key in lists and not data[key]):
             doc.add(key, data[key])
     return tomlkit.dumps(doc)
 

@@ -123,7 +123,8 @@ def test_mp4_without_imageio_ffmpeg_says_to_use_gif_in_one_line(tmp_path, capsys
 def test_the_real_command_refuses_a_scene_without_bodies_in_one_line(tmp_path):
     result = run_marchlab("simulate", "classroom", "-o", "x.gif", cwd=tmp_path)
     assert_one_line_error(result.returncode, result.stderr)
-    assert result.stderr == "marchlab: error: classroom: has no [[bodies]] to simulate\n"
+    assert result.stderr == ("marchlab: error: classroom: has no [[bodies]] to simulate "
+                             "(marchlab animate renders a scene without them)\n")
     assert list(tmp_path.iterdir()) == []
 
 
