@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import functools
 import importlib
+import warnings
 from dataclasses import dataclass
 from typing import Callable
 
@@ -90,6 +91,9 @@ def render(scene: Scene, width: int, height: int, backend: str = "numpy",
         raise MarchlabError(f"scene must be a marchlab.Scene (got {type(scene).__name__}); "
                             "use marchlab.load_scene(name_or_path)")
     check_render(scene, width, height, allow_large=allow_large)
+    from .light_check import lights_inside
+    for line in lights_inside(scene):               # the image would hide it: say so
+        warnings.warn(line, stacklevel=2)
     module = importlib.import_module(BACKENDS[backend].module)
     # Backends draw objects only: the bodies become spheres after the scene's objects.
     return module.render(rendered_scene(scene), width, height, precision=precision,
