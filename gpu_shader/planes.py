@@ -35,7 +35,7 @@ def frame_from_planes(planes, scene: Scene, backend: str, precision: str) -> Fra
                  steps=steps_id[..., 0].astype(np.int32, copy=False),
                  object_id=steps_id[..., 1].astype(np.int32, copy=False),
                  hit=color_hit[..., 3] > 0.5, gamma=scene.render.gamma,
-                 max_steps=scene.render.max_steps,
+                 max_steps=scene.render.max_steps, dither=scene.render.dither,
                  path=labels.view(np.uint32) if labels.dtype == np.int32 else labels.astype(np.uint32),
                  backend=backend, precision=precision)
 

@@ -67,6 +67,7 @@ def render(scene: Scene, width: int, height: int, precision: str = "float64",
     shape = {"color": (height, width, 3), "normal": (height, width, 3)}
     arrays = {k: v.reshape(shape.get(k, (height, width))) for k, v in out.items()}
     return Frame(**arrays, gamma=scene.render.gamma, max_steps=scene.render.max_steps,
+                 dither=scene.render.dither,
                  backend="numpy", precision=dtype.name)
 
 

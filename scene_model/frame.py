@@ -56,6 +56,7 @@ class Frame:
     backend: str = ""
     precision: str = ""
     path: np.ndarray | None = None
+    dither: bool = False
 
     @property
     def height(self) -> int:
@@ -73,7 +74,8 @@ class Frame:
         ``steps`` uses the heat ramp up to ``max_steps``. Misses are black in depth and normal.
         """
         if aov == "color":
-            return to_uint8(self.color ** (1 / self.gamma))
+            offsets = dither_offsets(self.height, self.width) if self.dither else None
+            return to_uint8(self.color ** (1 / self.gamma), offsets)
         if aov == "depth":
             t = np.where(self.hit, self.depth, np.nan)
             near, far = (np.nanmin(t), np.nanmax(t)) if self.hit.any() else (0.0, 1.0)
@@ -113,6 +115,7 @@ class Frame:
                                 steps=self.steps, object_id=self.object_id, hit=self.hit,
                                 gamma=self.gamma, max_steps=self.max_steps,
                                 backend=self.backend, precision=self.precision,
+                                dither=self.dither,
                                 **({} if self.path is None else {"path": self.path}))
         else:
             raise MarchlabError(f"{path}: unsupported output format {path.suffix!r} "
@@ -126,9 +129,35 @@ class Frame:
             arrays = {k: data[k] for k in ("color", "depth", "normal", "steps", "object_id", "hit")}
             return cls(**arrays, gamma=float(data["gamma"]), max_steps=int(data["max_steps"]),
                        backend=str(data["backend"]), precision=str(data["precision"]),
-                       path=data["path"] if "path" in data else None)
+                       path=data["path"] if "path" in data else None,
+                       dither=bool(data["dither"]) if "dither" in data else False)
 
 
-def to_uint8(x: np.ndarray) -> np.ndarray:
-    """[0, 1] floats to 0..255, rounding half up: floor(255 x + 0.5)."""
-    return np.floor(np.clip(x, 0, 1) * 255 + 0.5).astype(np.uint8)
+def to_uint8(x: np.ndarray, offsets: np.ndarray | None = None) -> np.ndarray:
+    """[0, 1] floats to 0..255, rounding half up: floor(255 x + 0.5); with ``offsets``
+    (H, W) in levels, in (-1/2, 1/2) (`dither_offsets`), floor(255 x + 0.5 + offset): ordered
+    dithering, so a smooth ramp shows a fine pattern instead of bands."""
+    level = np.clip(x, 0, 1) * 255 + 0.5
+    if offsets is not None:
+        level = level + (offsets[..., None] if level.ndim == 3 else offsets)
+    return np.clip(np.floor(level), 0, 255).astype(np.uint8)
+
+
+def bayer_matrix(size: int = 8) -> np.ndarray:
+    """Bayer's ordered-dither index matrix (size, size) of 0..size^2 - 1, size a power of two
+    (Bayer, "An optimum method for two-level rendition of continuous-tone pictures", IEEE
+    ICC 1973): M_2n = [[4 M_n, 4 M_n + 2], [4 M_n + 3, 4 M_n + 1]] from M_1 = [[0]]."""
+    matrix = np.zeros((1, 1), np.int64)
+    while len(matrix) < size:
+        matrix = np.block([[4 * matrix, 4 * matrix + 2], [4 * matrix + 3, 4 * matrix + 1]])
+    return matrix
+
+
+def dither_offsets(height: int, width: int) -> np.ndarray:
+    """The offset (H, W) in 8-bit levels added before rounding at each pixel: the 8x8 Bayer
+    matrix tiled from the top-left pixel, (index + 1/2) / 64 - 1/2, in (-1/2, 1/2). Over each
+    8x8 tile the offsets are spread evenly, so a flat colour's mean level is kept (to 1/64 of
+    a level) while the rounding error is moved to a fine, regular pattern."""
+    tile = (bayer_matrix(8) + 0.5) / 64 - 0.5
+    reps = (-(-height // 8), -(-width // 8))
+    return np.tile(tile, reps)[:height, :width]

@@ -214,6 +214,8 @@ class RenderSettings(Record):
     toon_bands: int = param(4, "Toon shading: number of brightness bands (an 8-bit image "
                                "shows at most 256).", Range(2, 256))
     ambient: Color = param((1.0, 1.0, 1.0), "Ambient light colour i_a.", color_range)
+    dither: bool = param(False, "Ordered (8x8 Bayer) dithering of the 8-bit image: a fine "
+                                "pattern instead of bands in smooth gradients.")
     gamma: float = param(2.2, "Display gamma applied when an image is saved.",
                          Range(0.1, 10.0, positive=True))
     fog: Fog = param(factory=Fog, doc="Distance fog.")
