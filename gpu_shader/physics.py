@@ -30,6 +30,14 @@ collides with the renderer's own generated SDF code for it (gpu_shader/physics_s
 with the functions of physics/colliders.py under their names: shape_contacts (probes for
 concave corners, surface_near for ridges), first_shape_hit (conservative advancement).
 
+A shape that moves (a kinematic object, ``Shape.motion``) is met where it is at the start of
+each step, as the CPU's ``Shape.at(world.time)`` puts it: before each step's dispatches the
+stepper writes its pose (R, pivot + s, w, s' at ``world.time``, computed in float64 by
+scene_model.motion) into its rows of the parameter block (`physics_shapes.pose_rows`), and
+the shader's contacts carry its surface velocity, which the solver subtracts from the
+relative velocity and the continuous test uses in the impact, as physics/impulses.py and
+physics/continuous.py do.
+
 How it differs from the CPU step, and why:
 
 - float32 only, and GLSL arithmetic: the driver may fuse a*b+c into one rounding and its
@@ -51,6 +59,9 @@ How it differs from the CPU step, and why:
 - at most 32 planes and 32 shapes (bit masks of the planes and shapes a body touches).
 - the CPU's shapes may be any Python function; the GPU's are scene nodes the shader generator
   can write (every node of the scene format).
+- a moving shape's pose is rounded to float32 once and applied in float32 (the CPU applies
+  it in float64 and rounds the point it gives), so where a kinematic object is involved the
+  steps agree with the CPU's to rounding, not bit for bit.
 - warm starting starts cold at the start of each `simulate` call (a fresh world does too), and
   the accumulated impulses are not written back to the World afterwards.
 - events are recorded by the shader with an atomic counter, drained every DRAIN_EVERY steps
@@ -71,7 +82,7 @@ from scene_model.shapes import primitives
 from .context import gl_context
 from .dialects import GLSL
 from .library import fill_template
-from .physics_shapes import shape_code
+from .physics_shapes import pose_rows, shape_code
 
 MAX_CONTACTS = 24        # per body and step: 12 touching equal spheres, walls, and room
 MAX_ITERATIONS = 64      # World.iterations allowed on the GPU (sizes the counter buffer)
@@ -103,8 +114,9 @@ BODY_DTYPE = np.dtype([("position", *VEC4), ("velocity", *VEC4), ("spin", *VEC4)
                        ("grid_rank", "<i4")])
 PLANE_DTYPE = np.dtype([("normal_offset", *VEC4), ("restitution", "<f4"), ("friction", "<f4"),
                         ("pad", "<f4", 2)])
-CONTACT_DTYPE = np.dtype([("normal_gap", *VEC4), ("tangent_total", *VEC4), ("other", "<i4"),
-                          ("slot", "<i4"), ("normal_total", "<f4"), ("gravity_part", "<f4"),
+CONTACT_DTYPE = np.dtype([("normal_gap", *VEC4), ("tangent_total", *VEC4),
+                          ("surface_velocity", *VEC4), ("other", "<i4"), ("slot", "<i4"),
+                          ("normal_total", "<f4"), ("gravity_part", "<f4"),
                           ("coefficients", "<f4", 2), ("pad", "<f4", 2)])
 GPU_EVENT_DTYPE = np.dtype([("step", "<i4"), ("stage", "<i4"), ("kind", "<i4"), ("body", "<i4"),
                             ("other", "<i4"), ("speed", "<f4"), ("impulse", "<f4"),
@@ -148,7 +160,9 @@ class GpuStepper:
     shape_nodes : sequence of scene_model.shapes.Node, optional
         For a world with static shapes: the scene object each of ``world.shapes`` was built
         from, in the same order (marchlab/colliders.py builds shape q from one node). The
-        shader collides with the renderer's code for that node.
+        shader collides with the renderer's code for that node; where ``world.shapes[q]``
+        has a motion (a kinematic object), with that node put where the motion has it at the
+        start of each step.
     shape_surfaces : sequence of (restitution (K,), friction (K,)) pairs, optional
         The coefficients of each primitive of each node, in depth-first order (the object
         ids of `scene_model.shapes.primitives`), as ``Shape.surface`` gives them on the CPU.
@@ -173,6 +187,7 @@ class GpuStepper:
         self.table_size, self.scan_block = grid_sizes(n)
         self.cell_size = cell_size(world)
         shapes = world_shape_code(world, shape_nodes or [], shape_surfaces)
+        self.moving_shapes = shapes.pose_rows  # shape q -> the first row of its pose in P
         with self.ctx:
             limit = self.ctx.info["GL_MAX_UNIFORM_BLOCK_SIZE"]
             if shapes.parameters.nbytes > limit:
@@ -189,7 +204,9 @@ class GpuStepper:
             self.motion = self.ctx.buffer(reserve=2 * n * MOTION_BYTES)
             self.contacts = self.ctx.buffer(reserve=2 * n * MAX_CONTACTS * CONTACT_BYTES)
             self.planes = self.ctx.buffer(upload_planes(world).tobytes())
-            self.counters = self.ctx.buffer(reserve=4 * COUNTERS)
+            # zeroed: the event count and the overflow flag are only ever added to (a reserved
+            # buffer may hold what a released one left, as NVIDIA's driver gives it back)
+            self.counters = self.ctx.buffer(bytes(4 * COUNTERS))
             self.events = self.ctx.buffer(reserve=self.capacity * GPU_EVENT_DTYPE.itemsize)
             # the grid (glsl/physics_grid.glsl); the counts start empty and the scan empties
             # them again after reading them, and the last start of each table stays 0
@@ -262,6 +279,7 @@ class GpuStepper:
     def _step(self) -> None:
         """One World._step: the dispatches listed in glsl/physics_step.glsl, in order."""
         iterations = self.world.iterations
+        self._place_moving_shapes()
         for index, buffer in enumerate((self.bodies, self.motion, self.contacts, self.planes,
                                         self.counters, self.events, self.cell_counts,
                                         self.cell_starts, self.block_starts,
@@ -288,6 +306,14 @@ class GpuStepper:
         self.parity ^= 1
         self.stepped = True
         self.world.steps += 1
+
+    def _place_moving_shapes(self) -> None:
+        """Write where each moving shape is at the start of this step (``world.time``, as
+        World._step's ``shape.at(self.time)``) into its rows of the parameter block."""
+        t = self.world.time
+        for q, row in self.moving_shapes.items():
+            rows = pose_rows(self.world.shapes[q].motion, t)
+            self.parameters.write(rows.tobytes(), offset=16 * row)
 
     def _drain_events(self) -> None:
         """Move the events recorded so far into the world and empty the GPU's event buffer;
@@ -373,10 +399,6 @@ def check_world(world, shape_nodes=None) -> None:
         from physics.solids import KIND_NAMES
         raise PhysicsError(f"the gpu backend steps spheres only (body {solid[0]} is a "
                            f"{KIND_NAMES[world.kind[solid[0]]]}): use the cpu backend")
-    moving = [shape.name for shape in world.shapes if shape.motion is not None]
-    if moving:
-        raise PhysicsError(f"the gpu backend does not move kinematic objects ({moving[0]} has "
-                           "a motion): use the cpu backend")
 
 
 def grid_sizes(count: int) -> tuple[int, int]:
@@ -406,7 +428,8 @@ def world_shape_code(world, nodes, surfaces=None):
                     for count, shape in zip(counts, world.shapes)]
     return shape_code(nodes, surfaces, [shape.lipschitz for shape in world.shapes],
                       [shape.normal_step for shape in world.shapes],
-                      [shape.name for shape in world.shapes])
+                      [shape.name for shape in world.shapes],
+                      [shape.motion for shape in world.shapes])
 
 
 def upload_bodies(world) -> np.ndarray:

@@ -115,16 +115,22 @@ def motion_pose(motion: Motion, t: float) -> tuple[np.ndarray, np.ndarray]:
     return rotation, shift
 
 
+def motion_rates(motion: Motion, t: float) -> tuple[np.ndarray, np.ndarray]:
+    """The angular velocity w (3,) in rad/s, world frame, and the shift's rate s'(t) (3,) in
+    m/s of ``motion`` at time ``t`` (s), float64."""
+    if motion.times:
+        _, _, w, shift_rate = _keyframed(motion, t)
+        return w, shift_rate
+    omega = 2 * math.pi / motion.period
+    return (np.radians(np.asarray(motion.spin, np.float64)),
+            np.asarray(motion.amplitude, np.float64) * omega * math.cos(omega * t))
+
+
 def motion_velocity(motion: Motion, t: float, points: np.ndarray) -> np.ndarray:
     """Velocity (K, 3) in m/s at time ``t`` of the object's points now at ``points`` (K, 3):
     w x (x - pivot - s(t)) + s'(t)."""
-    if motion.times:
-        _, shift, w, shift_rate = _keyframed(motion, t)
-    else:
-        w = np.radians(np.asarray(motion.spin, np.float64))
-        _, shift = motion_pose(motion, t)
-        omega = 2 * math.pi / motion.period
-        shift_rate = np.asarray(motion.amplitude) * omega * math.cos(omega * t)
+    _, shift = motion_pose(motion, t)
+    w, shift_rate = motion_rates(motion, t)
     arm = np.asarray(points, np.float64) - np.asarray(motion.pivot) - shift
     return np.cross(w, arm) + shift_rate
 

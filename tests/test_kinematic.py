@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import physics
-from marchlab.simulation import build_world, simulate
+from marchlab.simulation import build_world
 from scene_model.builder import (Body, Material, PhysicsSettings, Scene, box, capped_cylinder,
                                  plane)
 from scene_model.errors import SceneError
@@ -143,10 +143,3 @@ def test_a_motion_of_an_object_that_is_not_there_is_refused_in_one_line():
     assert "\n" not in str(caught.value)
 
 
-def test_the_gpu_step_refuses_kinematic_objects_in_one_line():
-    scene = Scene(materials={"default": Material()}, objects=(box(1),),
-                  motions=(Motion(object=0, spin=(0, 10, 0)),),
-                  physics=PhysicsSettings(solver="simultaneous"),
-                  bodies=(Body(position=(0, 2, 0), radius=0.1),))
-    with pytest.raises(physics.PhysicsError, match="kinematic objects"):
-        simulate(build_world(scene, np.float32), 0.1, backend="gpu", scene=scene)

@@ -37,7 +37,9 @@
 // Rounding: every sum and product is written in the CPU's order (dot3, not dot), and the
 // results the continuous test builds from chains of products are `precise`: without it the
 // compiler may regroup a product with a constant, (0.5 t t) A as t (t A) 0.5, and round a
-// step differently from NumPy. With both, llvmpipe's float32 steps equal the CPU's bit for bit.
+// step differently from NumPy. With both, llvmpipe's float32 steps equal the CPU's bit for bit
+// (where a kinematic object moves, to rounding: its pose is applied in float32 here and in
+// float64 on the CPU; gpu_shader/physics_shapes.py).
 
 layout(local_size_x = 64) in;
 
@@ -104,6 +106,8 @@ struct Motion {             // SolverBodies row: velocity and spin during the so
 struct Contact {            // one entry of a body's contact list (physics.contacts.Contacts)
     vec4 normal_gap;        // xyz: unit normal from b to a; w: gap (m)
     vec4 tangent_total;     // xyz: accumulated friction impulse on a (N s); w: unused
+    vec4 surface_velocity;  // xyz: velocity of b's surface at the contact (m/s): a moving
+                            // shape's (a kinematic object), 0 for the others; w: unused
     int other;              // the other sphere's index, plane_code(p) or shape_code(q)
     int slot;               // which of the ball's contacts with that shape (0 for the others)
     float normal_total;     // accumulated normal impulse (N s)
@@ -174,7 +178,8 @@ uniform int u_all_pairs;     // 1: every walk tests every body (the textbook loo
 // Written in by gpu_shader/physics_shapes.py for the shapes of this world: for each shape q,
 // shape_distance_q, shape_object_id_q and shape_normal_q from the scene object's tree, as
 // the renderer writes it, then the same by shape index: shape_distance(q, p), shape_normal,
-// shape_surface (restitution, friction), shape_lipschitz and shape_normal_step.
+// shape_surface (restitution, friction), shape_velocity (of a moving shape's surface, where
+// the step starts: Shape.at), shape_lipschitz and shape_normal_step.
 
 #define real float
 {{ shapes }}
@@ -239,10 +244,11 @@ float inverse_inertia_of(int body) { return body < 0 ? 0.0 : bodies[body].invers
 
 // --- the formulas of physics/impulses.py ---------------------------------------------------
 
-// v_rel of a's contact point relative to b's: v_a - v_b - (r_a w_a + r_b w_b) x n.
-vec3 relative_velocity(int a, int b, vec3 n) {
+// v_rel of a's contact point relative to b's: v_a - v_b - (r_a w_a + r_b w_b) x n, less the
+// velocity `surface` of a moving static surface b (a kinematic object; 0 for the others).
+vec3 relative_velocity(int a, int b, vec3 n, vec3 surface) {
     vec3 lever = radius_of(a) * spin_of(a) + radius_of(b) * spin_of(b);
-    return velocity_of(a) - velocity_of(b) - cross3(lever, n);
+    return velocity_of(a) - velocity_of(b) - cross3(lever, n) - surface;
 }
 
 // k_n = 1/m_a + 1/m_b and k_t = k_n + r_a^2/I_a + r_b^2/I_b, each inverse mass and inertia
@@ -392,12 +398,17 @@ void shape_contacts(int i, int shape, int start, inout int count, inout int land
             new_surface = new_surface && dot3(m, seen[k]) < SAME_SURFACE;
         }
         if (!new_surface) return;
-        // The coefficients of the material at the contact point, on the surface below the ball.
+        // The coefficients of the material at the contact point, on the surface below the ball,
+        // and the velocity of the surface there (at the touching point x - (gap + r) m).
         vec2 surface = shape_surface(shape, probe - (gap + r) * m);
-        float approach = -dot3(m, self.velocity.xyz);
-        bool arriving = gap >= 0.0 && approach > u_threshold;   // left to bounce_off_statics
-        Contact contact = Contact(vec4(m, gap), vec4(0.0), shape_code(shape), slot, 0.0,
-                                  u_h * dot3(m, u_gravity),
+        vec3 velocity = shape_velocity(shape, x - (gap + r) * m);
+        // World._step: approaching relative to the surface; only a still surface is left to
+        // bounce_off_statics (`still`: the continuous test does not follow a moving one).
+        float approach = -dot3(m, self.velocity.xyz - velocity);
+        bool still = all(equal(velocity, vec3(0.0)));
+        bool arriving = still && gap >= 0.0 && approach > u_threshold;
+        Contact contact = Contact(vec4(m, gap), vec4(0.0), vec4(velocity, 0.0),
+                                  shape_code(shape), slot, 0.0, u_h * dot3(m, u_gravity),
                                   static_coefficients(i, surface.x, surface.y), vec2(0.0));
         if (arriving) {
             // its tangent plane, n . x = offset, for the continuous test
@@ -456,8 +467,8 @@ Contact sphere_contact(int i, int j) {
     // coincident centres: the fixed fallback normal +y (contacts.FALLBACK_NORMAL)
     vec3 n = distance == 0.0 ? FALLBACK_NORMAL : d / distance;
     float gap = distance - (bodies[a].radius + bodies[b].radius);
-    return Contact(vec4(n, gap), vec4(0.0), j, 0, 0.0, 0.0, sphere_coefficients(i, j),
-                   vec2(0.0));
+    return Contact(vec4(n, gap), vec4(0.0), vec4(0.0), j, 0, 0.0, 0.0,
+                   sphere_coefficients(i, j), vec2(0.0));
 }
 
 // continuous.stop_sphere_sweeps for one pair: whether spheres i and j, moving in straight
@@ -509,8 +520,8 @@ void begin_step(int i) {
             float approach = -dot3(n, self.velocity.xyz);
             bool arriving = gap >= 0.0 && approach > u_threshold;
             if (gap <= u_slop && !arriving) {
-                Contact contact = Contact(vec4(n, gap), vec4(0.0), plane_code(p), 0, 0.0,
-                                          u_h * dot3(n, u_gravity),
+                Contact contact = Contact(vec4(n, gap), vec4(0.0), vec4(0.0), plane_code(p), 0,
+                                          0.0, u_h * dot3(n, u_gravity),
                                           static_coefficients(i, planes[p].restitution,
                                                               planes[p].friction), vec2(0.0));
                 if (!append_contact(start, count, landing, contact)) break;
@@ -573,7 +584,7 @@ void collide_count(int i) {
         Contact k = contacts[start + c];
         int a, b;
         contact_bodies(i, k.other, a, b);
-        vec3 v_rel = relative_velocity(a, b, k.normal_gap.xyz);
+        vec3 v_rel = relative_velocity(a, b, k.normal_gap.xyz, k.surface_velocity.xyz);
         if (k.gravity_part - dot3(v_rel, k.normal_gap.xyz) > u_threshold) colliding++;
     }
     bodies[i].colliding = colliding;
@@ -592,7 +603,7 @@ void collide_apply(int i) {
             int a, b;
             contact_bodies(i, k.other, a, b);
             vec3 n = k.normal_gap.xyz;
-            vec3 v_rel = relative_velocity(a, b, n);
+            vec3 v_rel = relative_velocity(a, b, n, k.surface_velocity.xyz);
             if (k.gravity_part - dot3(v_rel, n) <= u_threshold) continue;
             float share_b = b < 0 ? 1.0 : float(bodies[b].colliding);
             vec2 mass = effective_masses(a, b, float(bodies[a].colliding), share_b);
@@ -642,7 +653,7 @@ void rest_pass(int i) {
             int a, b;
             contact_bodies(i, k.other, a, b);
             vec3 n = k.normal_gap.xyz;
-            vec3 v_rel = relative_velocity(a, b, n);
+            vec3 v_rel = relative_velocity(a, b, n, k.surface_velocity.xyz);
             float share_b = b < 0 ? 1.0 : float(bodies[b].contact_count[u_list]);
             vec2 mass = effective_masses(a, b, float(bodies[a].contact_count[u_list]),
                                          share_b);
@@ -789,10 +800,17 @@ int first_wall_hit(int i, vec3 position, vec3 velocity, vec3 acceleration, float
 }
 
 // continuous._surface: the (restitution, friction) of the plane or shape `wall` met by a
-// ball centred at `position` (a shape's where the ball's centre is).
+// ball centred at `position` (a shape's where the ball's centre is) ...
 vec2 wall_coefficients(int wall, vec3 position) {
     if (wall < u_planes) return vec2(planes[wall].restitution, planes[wall].friction);
     return shape_surface(wall - u_planes, position);
+}
+
+// ... and its surface velocity there: a moving shape's where it is at the start of the step
+// (the continuous test does not follow it through the step), 0 for a plane.
+vec3 wall_velocity(int wall, vec3 position) {
+    if (wall < u_planes) return vec3(0.0);
+    return shape_velocity(wall - u_planes, position);
 }
 
 // The positions stage of World._step, then continuous.bounce_off_statics for this body: follow
@@ -835,8 +853,10 @@ void integrate_positions(int i) {
         bool plane = wall < u_planes;
         vec3 n = plane ? planes[wall].normal_offset.xyz : face;
         vec2 surface = wall_coefficients(wall, position);
-        // continuous._impact: a collision impulse, inelastic below the restitution threshold
-        vec3 v_rel = velocity - cross3(self.radius * spin, n);
+        vec3 surface_velocity = wall_velocity(wall, position);
+        // continuous._impact: a collision impulse, inelastic below the restitution threshold,
+        // relative to the surface's velocity
+        vec3 v_rel = velocity - cross3(self.radius * spin, n) - surface_velocity;
         float approach = -dot3(v_rel, n);
         float restitution = approach > u_threshold ? max(self.restitution, surface.x) : 0.0;
         float friction = sqrt(self.friction * surface.y);
@@ -849,9 +869,10 @@ void integrate_positions(int i) {
         spin -= (self.radius * self.inverse_inertia) * cross3(n, impulse);
         record_event(100 + pass, plane ? KIND_SPHERE_PLANE : KIND_SPHERE_SHAPE, i,
                      plane ? wall : wall - u_planes, 0, approach, j);
-        // Landed: it would fall back through before the step ends, so the surface holds it.
+        // Landed: it would fall back through before the step ends, so the surface holds it
+        // (u_n relative to a moving surface).
         float left = u_h - elapsed;
-        float u_n = dot3(velocity, n), a_n = dot3(acceleration, n);
+        float u_n = dot3(velocity - surface_velocity, n), a_n = dot3(acceleration, n);
         precise float fall = u_n * left + 0.5 * a_n * left * left;
         if (fall <= 0.0) {
             velocity -= u_n * n;
