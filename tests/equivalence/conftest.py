@@ -13,6 +13,7 @@ they are trends to watch, not gates.
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from marchlab import render
@@ -53,3 +54,15 @@ def pytest_terminal_summary(terminalreporter):
     for case, backend, reference, psnr, ssim in sorted(TRENDS):
         write(f"{case:<{width}}  {backend:>6} vs numpy {reference}  "
               f"PSNR {psnr:7.2f}  SSIM {ssim:.5f}")
+
+
+def contact_steps(events) -> list:
+    """(step, kind, body, other) of each physics event, in order: what two runs of one world
+    (the CPU and the GPU step) must agree on."""
+    return [(int(e["step"]), str(e["kind"]), int(e["body"]), int(e["other"])) for e in events]
+
+
+def position_difference(gpu, cpu) -> float:
+    """The largest |x_gpu - x_cpu| (m) over two trajectories recorded at the same steps."""
+    np.testing.assert_array_equal(gpu.steps, cpu.steps)
+    return float(np.abs(gpu.positions.astype(np.float64) - cpu.positions).max())

@@ -36,6 +36,7 @@ from reference_cpu.scene_sdf import build_scene_sdf
 from required_backends import need_backend
 from scene_model.builder import (Body, Material, PhysicsSettings, Scene, box, capped_cylinder,
                                   plane, sphere)
+from .conftest import contact_steps, position_difference
 
 TOLERANCE = 1e-4               # m, at every recorded step
 R = 0.1                        # radius of the balls (m)
@@ -113,16 +114,10 @@ def runs(case: str):
     return gpu, cpu
 
 
-def contact_steps(events) -> list:
-    """(step, kind, body, other) of each event, in order."""
-    return [(int(e["step"]), str(e["kind"]), int(e["body"]), int(e["other"])) for e in events]
-
-
 @pytest.mark.parametrize("case", list(CASES))
 def test_gpu_positions_match_cpu_within_tolerance_at_every_step(case, capsys):
     gpu, cpu = runs(case)
-    np.testing.assert_array_equal(gpu.steps, cpu.steps)
-    error = np.abs(gpu.positions.astype(np.float64) - cpu.positions).max()
+    error = position_difference(gpu, cpu)
     with capsys.disabled():
         print(f"\n[shapes] {case}: GPU and CPU float32 positions differ by at most {error:.3g} m")
     assert error <= TOLERANCE
