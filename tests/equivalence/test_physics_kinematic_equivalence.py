@@ -40,6 +40,8 @@ from scene_model.builder import (Body, Material, PhysicsSettings, Scene, box, ca
                                  plane)
 from scene_model.motion import Motion, motion_pose
 
+from .conftest import contact_steps, position_difference
+
 TOLERANCE = 1e-4               # m, at every recorded step
 G = 9.81
 SIMULTANEOUS = dict(solver="simultaneous")
@@ -133,16 +135,10 @@ def runs(case: str):
     return gpu, cpu
 
 
-def contact_steps(events) -> list:
-    """(step, kind, body, other) of each event, in order."""
-    return [(int(e["step"]), str(e["kind"]), int(e["body"]), int(e["other"])) for e in events]
-
-
 @pytest.mark.parametrize("case", list(CASES))
 def test_gpu_positions_match_cpu_within_tolerance_at_every_step(case, capsys):
     gpu, cpu = runs(case)
-    np.testing.assert_array_equal(gpu.steps, cpu.steps)
-    error = np.abs(gpu.positions.astype(np.float64) - cpu.positions).max()
+    error = position_difference(gpu, cpu)
     with capsys.disabled():
         print(f"\n[kinematic] {case}: GPU and CPU float32 positions differ by at most "
               f"{error:.3g} m")
