@@ -322,6 +322,8 @@ BASE = {
     "compare": ("compare", "classroom", "--a", "numpy", "--b", "numpy", "--size", "16x12"),
     "simulate": ("simulate", "bounce", "-o", "out.gif", "--seconds", "0.05", "--fps", "20",
                  "--size", "8x6", "--backend", "numpy"),
+    "animate": ("animate", "classroom", "-o", "out.gif", "--seconds", "0.05", "--fps", "20",
+                "--size", "8x6", "--backend", "numpy"),
     "truth": ("truth", "classroom", "-o", "truth.npz", "--size", "8x6"),
     "bench accuracy": ("bench", "accuracy", "--quick", "-o", "report.md", "--size", "160x120",
                        "--repeat", "3"),
