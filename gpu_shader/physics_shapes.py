@@ -19,7 +19,7 @@ of a parameter block ``P``, as in the renderer, so the text depends only on the 
 A shape that a `scene_model.motion.Motion` moves (a kinematic object) keeps the functions
 above for the object as given, and gets its pose as rows of ``P`` that the physics step
 rewrites before each step (`pose_rows`, the time at the start of the step, as
-``Shape.at(world.time)`` on the CPU). With x(t) = R (x - pivot) + pivot + s:
+``Shape.at(world.time)`` on the CPU). With x(t) = R (x - pivot) + pivot + s::
 
     vec3 shape_local_q(vec3 p)        R^T (p - pivot - s) + pivot: where p is on the
                                       object as given                (Shape.at, ``local``)
