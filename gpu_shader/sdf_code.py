@@ -14,10 +14,10 @@ import numpy as np
 
 from scene_model.errors import MarchlabError
 from scene_model.geometry import rotation_matrix
-from scene_model.shapes import (Box, CappedCylinder, Capsule, Cone, Intersection, Node, Plane,
-                                Repeat, Rotate, RoundBox, Scale, SmoothIntersection,
-                                SmoothSubtraction, SmoothUnion, Sphere, Subtraction, Torus,
-                                Translate, Union, scene_union)
+from scene_model.shapes import (Box, CappedCylinder, Capsule, Cone, Disk, HexPrism, Intersection,
+                                Node, Plane, Pyramid, Repeat, Rotate, RoundBox, Scale,
+                                SmoothIntersection, SmoothSubtraction, SmoothUnion, Sphere,
+                                Subtraction, Torus, Translate, Union, scene_union)
 
 from .parameters import ParameterBlock
 
@@ -34,7 +34,8 @@ OPERATORS = {
 
 PRIMITIVES = {Sphere: "sdf_sphere", Box: "sdf_box", RoundBox: "sdf_round_box",
               Plane: "sdf_plane", Torus: "sdf_torus", CappedCylinder: "sdf_capped_cylinder",
-              Capsule: "sdf_capsule", Cone: "sdf_cone"}
+              Capsule: "sdf_capsule", Cone: "sdf_cone", Pyramid: "sdf_pyramid", Disk: "sdf_disk",
+              HexPrism: "sdf_hex_prism"}
 
 TRANSFORMS = {Translate: "op_translate", Rotate: "op_rotate", Scale: "op_scale",
               Repeat: "op_repeat"}
@@ -68,6 +69,12 @@ def primitive_parameters(node: Node) -> tuple[list, list[str]]:
                     ["P[{r}].xyz", "P[{r1}].xyz", "P[{r}].w"])
         case Cone():
             return [[node.radius, node.height]], ["P[{r}].x", "P[{r}].y"]
+        case Pyramid():
+            return [[node.base, node.height]], ["P[{r}].x", "P[{r}].y"]
+        case Disk():
+            return [[node.radius, node.thickness]], ["P[{r}].x", "P[{r}].y"]
+        case HexPrism():
+            return [[node.apothem, node.half_length]], ["P[{r}].x", "P[{r}].y"]
     raise unsupported(node)
 
 

@@ -33,8 +33,8 @@ from scene_model.camera import camera_basis
 from scene_model.colormaps import HEAT_COLORS, HEAT_STOPS
 from scene_model.errors import MarchlabError
 from scene_model.scene import DirectionalLight, PointLight, Scene, SpotLight, rendered_scene
-from scene_model.shapes import (Box, CappedCylinder, Capsule, Cone, Plane, Rotate, RoundBox, Scale,
-                                Sphere, Torus, Translate)
+from scene_model.shapes import (Box, CappedCylinder, Capsule, Cone, Disk, HexPrism, Plane, Pyramid,
+                                Rotate, RoundBox, Scale, Sphere, Torus, Translate)
 
 from .context import renderer_name
 from .dialects import GLSL, MAX_FLAT_ROWS
@@ -47,7 +47,8 @@ from .sdf_code import primitive_parameters, transform_parameters
 # Codes of the run-time switches; written into the program as #define NAME code.
 SHAPES = {Sphere: "SHAPE_SPHERE", Box: "SHAPE_BOX", RoundBox: "SHAPE_ROUND_BOX",
           Plane: "SHAPE_PLANE", Torus: "SHAPE_TORUS", CappedCylinder: "SHAPE_CAPPED_CYLINDER",
-          Capsule: "SHAPE_CAPSULE", Cone: "SHAPE_CONE"}
+          Capsule: "SHAPE_CAPSULE", Cone: "SHAPE_CONE", Pyramid: "SHAPE_PYRAMID",
+          Disk: "SHAPE_DISK", HexPrism: "SHAPE_HEX_PRISM"}
 TRANSFORMS = {Translate: "TRANSFORM_TRANSLATE", Rotate: "TRANSFORM_ROTATE",
               Scale: "TRANSFORM_SCALE"}
 LIGHTS = {DirectionalLight: "LIGHT_DIRECTIONAL", PointLight: "LIGHT_POINT",

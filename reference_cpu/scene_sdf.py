@@ -14,10 +14,10 @@ from typing import Callable
 import numpy as np
 
 from scene_model.geometry import rotation_matrix
-from scene_model.shapes import (Box, CappedCylinder, Capsule, Cone, Intersection, Node, Plane,
-                                Repeat, Rotate, RoundBox, Scale, SmoothIntersection,
-                                SmoothSubtraction, SmoothUnion, Sphere, Subtraction, Torus,
-                                Translate, Union)
+from scene_model.shapes import (Box, CappedCylinder, Capsule, Cone, Disk, HexPrism, Intersection,
+                                Node, Plane, Pyramid, Repeat, Rotate, RoundBox, Scale,
+                                SmoothIntersection, SmoothSubtraction, SmoothUnion, Sphere,
+                                Subtraction, Torus, Translate, Union)
 
 from . import sdf as S
 from .march import columns
@@ -123,6 +123,15 @@ def _build(node: Node, dtype: np.dtype, with_ids: bool, next_id) -> SDF:
         case Cone():
             r, h = f(node.radius), f(node.height)
             return leaf(lambda p: S.sdf_cone(p, r, h))
+        case Pyramid():
+            b, h = f(node.base), f(node.height)
+            return leaf(lambda p: S.sdf_pyramid(p, b, h))
+        case Disk():
+            r, t = f(node.radius), f(node.thickness)
+            return leaf(lambda p: S.sdf_disk(p, r, t))
+        case HexPrism():
+            a, h = f(node.apothem), f(node.half_length)
+            return leaf(lambda p: S.sdf_hex_prism(p, a, h))
         case Translate():
             inner, offset = child(), vec(node.offset)
             return lambda p: inner(S.op_translate(p, offset))

@@ -105,6 +105,89 @@ def sdf_cone(p, radius, height):
     return np.sqrt(d2) * sign
 
 
+def sdf_pyramid(p, base, height):
+    """Square pyramid along y: base of side ``base`` on y = 0, apex at y = ``height``.
+
+    Quilez's exact pyramid (sdPyramid, written for a base of side 1), here in true lengths for
+    the half side s = base / 2 and height h, and with the base face, which sdPyramid leaves
+    out (below y = 0, and inside next to the base, it is not the distance).
+
+    Folded by symmetry onto 0 <= z <= x, the nearest side is the +x face. Measured from the
+    base corner (s, 0, s), that face's plane has the outward unit normal (h, s) / L in (x, y),
+    where L = sqrt(h^2 + s^2) is the slant height. In the plane, with coordinates (z, ``up``),
+    the half face is the triangle (0, 0), (-s, 0), (-s, L). The distance is Pythagoras' sum of
+    the height ``above`` the plane and the distance, in the plane, from the point's foot to
+    that triangle: 0 if the foot is on it, else to the nearer of its base edge and its
+    slanted edge. Below the base plane the nearest point is on the base square instead.
+    """
+    s, h = 0.5 * base, height
+    ax, az = np.abs(p[:, 0]), np.abs(p[:, 2])
+    x = np.maximum(ax, az) - s                  # the fold, from the corner (s, 0, s)
+    z = np.minimum(ax, az) - s
+    y = p[:, 1]
+    slant = np.sqrt(h * h + s * s)
+    above = (h * x + s * y) / slant             # height above the face's plane
+    up = (h * y - s * x) / slant                # up the face, from the base edge
+    # Squared distances to the base edge (up = 0, z <= 0) and, by clamped projection, to the
+    # slanted edge from the corner (0, 0) to the apex (-s, L).
+    edge = np.maximum(z, 0)
+    edge2 = edge * edge + up * up
+    t = np.clip((slant * up - s * z) / (s * s + slant * slant), 0, 1)
+    ex, ey = z + s * t, up - slant * t
+    # The foot is on the face where up > 0 and it is inside the slanted edge (L z + s up < 0).
+    on_face = np.minimum(up, -(slant * z + s * up)) > 0
+    d2 = np.where(on_face, 0, np.minimum(edge2, ex * ex + ey * ey))
+    # Inside where below the face's plane and above the base plane; the base may be nearer.
+    sides = np.sqrt(d2 + above * above) * np.sign(np.maximum(above, -y))
+    # Below the base plane the solid lies above it and within the base square's outline, so
+    # the nearest point is on the square, as for a flat box.
+    bx, bz = np.maximum(x, 0), np.maximum(z, 0)
+    below = np.sqrt(bx * bx + bz * bz + y * y)
+    return np.where(y < 0, below, np.maximum(sides, -y))
+
+
+def sdf_disk(p, radius, thickness):
+    """Round disk in the xz-plane, ``radius`` wide and ``thickness`` thick, its rim rounded.
+
+    The distance to the flat circle of radius a = radius - thickness / 2 in the plane y = 0
+    (its nearest point is p's foot in the plane, pulled in to the circle's rim), minus the
+    rounding thickness / 2: Quilez's rounding operator on an exact distance to a convex set,
+    which is exact again (his rounded cylinder with height 0).
+    """
+    rounding = 0.5 * thickness
+    rim = length2(p[:, 0], p[:, 2]) - (radius - rounding)
+    return length2(np.maximum(rim, 0), p[:, 1]) - rounding
+
+
+# cos 30 degrees and tan 30 degrees, the hexagon's constants in sdf_hex_prism.
+COS_30 = 0.8660254037844386
+TAN_30 = 0.5773502691896258
+
+
+def sdf_hex_prism(p, apothem, half_length):
+    """Hexagonal prism along z: a regular hexagon in the xy-plane with flat sides at
+    y = +-``apothem`` (its corners on the x axis), from z = -``half_length`` to +``half_length``.
+
+    Quilez's sdHexPrism. By symmetry p is folded into x, y >= 0, then mirrored across the
+    line at 60 degrees (unit normal k = (-cos 30, 1/2)) that maps the slanted side onto the
+    top one; the hexagon's signed distance is then the distance to the top side (y = apothem,
+    |x| <= apothem tan 30), negative below it. The prism is that 2-D shape extruded along z,
+    which combines like a 2-D box: outside, the length of the positive parts; inside, the
+    larger (less negative) of the two.
+    """
+    x, y, z = np.abs(p[:, 0]), np.abs(p[:, 1]), np.abs(p[:, 2])
+    fold = 2.0 * np.minimum(-COS_30 * x + 0.5 * y, 0)
+    x = x + fold * COS_30
+    y = y - fold * 0.5
+    half_side = TAN_30 * apothem
+    dy = y - apothem
+    hexagon = length2(x - np.clip(x, -half_side, half_side), dy) * np.sign(dy)
+    along = z - half_length
+    outside = length2(np.maximum(hexagon, 0), np.maximum(along, 0))
+    inside = np.minimum(np.maximum(hexagon, along), 0)
+    return inside + outside
+
+
 # --- Combining distances (CSG) --------------------------------------------------------------
 
 def op_union(d1, d2):

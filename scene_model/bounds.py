@@ -28,9 +28,9 @@ import math
 import numpy as np
 
 from .geometry import rotation_matrix
-from .shapes import (Box, CappedCylinder, Capsule, Cone, Intersection, Node, Plane, Repeat, Rotate,
-                     RoundBox, Scale, SmoothIntersection, SmoothSubtraction, SmoothUnion, Sphere,
-                     Subtraction, Torus, Translate, Union)
+from .shapes import (Box, CappedCylinder, Capsule, Cone, Disk, HexPrism, Intersection, Node, Plane,
+                     Pyramid, Repeat, Rotate, RoundBox, Scale, SmoothIntersection,
+                     SmoothSubtraction, SmoothUnion, Sphere, Subtraction, Torus, Translate, Union)
 
 # A sphere as (centre (3,) float64 ndarray, radius), or None for an unbounded shape.
 Sphere_ = tuple[np.ndarray, float] | None
@@ -59,6 +59,13 @@ def bounding_sphere(node: Node) -> Sphere_:
         case Cone():                          # base disc at y = 0, apex at y = height
             return np.array([0.0, node.height / 2, 0.0]), math.hypot(node.radius,
                                                                       node.height / 2)
+        case Pyramid():                       # base corners at y = 0, apex at y = height
+            return np.array([0.0, node.height / 2, 0.0]), math.hypot(node.base / math.sqrt(2),
+                                                                      node.height / 2)
+        case Disk():                          # the rounded rim reaches out to the radius
+            return origin, node.radius
+        case HexPrism():                      # the hexagon's corners are 2 apothem / sqrt(3) out
+            return origin, math.hypot(2 * node.apothem / math.sqrt(3), node.half_length)
         case Plane():
             return None
         case Translate():

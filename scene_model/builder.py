@@ -20,12 +20,13 @@ from functools import reduce
 from .bodies import Body, PhysicsSettings
 from .scene import (Camera, Checker, DirectionalLight, Fog, Material, PointLight, RenderSettings,
                     Scene, SkyBackground, SolidBackground, SpotLight)
-from .shapes import Box, CappedCylinder, Capsule, Cone, Node, Plane, RoundBox, Sphere, Torus
+from .shapes import (Box, CappedCylinder, Capsule, Cone, Disk, HexPrism, Node, Plane, Pyramid,
+                     RoundBox, Sphere, Torus)
 
 __all__ = ["sphere", "box", "round_box", "plane", "torus", "capped_cylinder", "capsule", "cone",
-           "union", "intersection", "Scene", "Camera", "RenderSettings", "Material", "Checker",
-           "PointLight", "DirectionalLight", "SpotLight", "Fog", "SkyBackground",
-           "SolidBackground", "Body", "PhysicsSettings"]
+           "pyramid", "disk", "hex_prism", "union", "intersection", "Scene", "Camera",
+           "RenderSettings", "Material", "Checker", "PointLight", "DirectionalLight", "SpotLight",
+           "Fog", "SkyBackground", "SolidBackground", "Body", "PhysicsSettings"]
 
 
 def _half_size(x, y, z):
@@ -77,6 +78,22 @@ def capsule(a=(0.0, -0.5, 0.0), b=(0.0, 0.5, 0.0), radius: float = 0.25,
 def cone(radius: float = 0.5, height: float = 1.0, material: str = "default") -> Cone:
     """Cone with its base disc at y = 0 and its apex at y = height."""
     return Cone(radius, height, material=material)
+
+
+def pyramid(base: float = 1.0, height: float = 1.0, material: str = "default") -> Pyramid:
+    """Square pyramid with its base (side ``base``) at y = 0 and its apex at y = height."""
+    return Pyramid(base, height, material=material)
+
+
+def disk(radius: float = 1.0, thickness: float = 0.25, material: str = "default") -> Disk:
+    """Round disk in the xz-plane, ``radius`` wide and ``thickness`` thick, its rim rounded."""
+    return Disk(radius, thickness, material=material)
+
+
+def hex_prism(apothem: float = 0.5, half_length: float = 0.5,
+              material: str = "default") -> HexPrism:
+    """Hexagonal prism along z; its hexagon's flat sides are ``apothem`` from the axis."""
+    return HexPrism(apothem, half_length, material=material)
 
 
 def union(*nodes: Node) -> Node:

@@ -170,6 +170,41 @@ class Cone(Primitive):
     height: float = param(1.0, "Height of the apex above the base.", SIZE)
 
 
+@dataclass(frozen=True)
+class Pyramid(Primitive):
+    """Square pyramid along y: base of side ``base`` at y = 0 (|x|, |z| <= base / 2), apex at
+    y = ``height``."""
+    kind: ClassVar[str] = "pyramid"
+    base: float = param(1.0, "Side of the square base (the whole side, not half of it).", SIZE)
+    height: float = param(1.0, "Height of the apex above the base.", SIZE)
+
+
+@dataclass(frozen=True)
+class Disk(Primitive):
+    """Round disk in the xz-plane: the points within ``thickness`` / 2 of the flat circle of
+    radius ``radius`` - ``thickness`` / 2 in y = 0, so ``thickness`` thick, ``radius`` wide
+    and its rim rounded."""
+    kind: ClassVar[str] = "disk"
+    radius: float = param(1.0, "Outer radius, rounded rim included.", SIZE)
+    thickness: float = param(0.25, "Thickness along y, at most twice the radius.", SIZE)
+
+    def check(self):
+        # The flat circle inside has radius radius - thickness / 2, which must not be negative
+        # (at thickness = 2 radius the disk is a sphere).
+        if self.thickness > 2 * self.radius:
+            raise SceneError(f"must not exceed twice the radius {show(self.radius)} "
+                             f"(got {show(self.thickness)})", ("thickness",))
+
+
+@dataclass(frozen=True)
+class HexPrism(Primitive):
+    """Hexagonal prism along z: a regular hexagon in the xy-plane with flat sides at
+    y = +-``apothem``, from z = -``half_length`` to z = +``half_length``."""
+    kind: ClassVar[str] = "hex_prism"
+    apothem: float = param(0.5, "Distance from the axis to each flat side of the hexagon.", SIZE)
+    half_length: float = param(0.5, "Half the prism's length along z.", SIZE)
+
+
 # --- CSG operators -----------------------------------------------------------------------
 
 at_least_one = Rule(lambda children: len(children) >= 1, "must have at least one child",

@@ -116,3 +116,99 @@ def cone_distance(p, radius, height):
     distance = np.minimum(segment_distance_2d(q, origin, rim), segment_distance_2d(q, rim, apex))
     is_inside = (q[:, 1] >= 0) & (q[:, 0] / radius + q[:, 1] / height <= 1)
     return np.where(is_inside, -distance, distance)
+
+
+def disk_distance(p, radius, thickness):
+    """The nearest point of the flat circle of radius a = radius - thickness / 2 in y = 0 is p's
+    foot (x, 0, z), pulled in to the rim if it lies outside; the disk is everything within
+    thickness / 2 of that circle."""
+    a, rounding = radius - thickness / 2, thickness / 2
+    rho, radial = azimuth_frame(p)
+    foot = np.column_stack([p[:, 0], np.zeros(len(p)), p[:, 2]])
+    rim = a * np.nan_to_num(radial)                      # rho = 0: the centre is the foot
+    nearest = np.where((rho <= a)[:, None], foot, rim)
+    return np.linalg.norm(p - nearest, axis=-1) - rounding
+
+
+# --- Convex polyhedra as triangle meshes -----------------------------------------------------
+
+def triangle_closest_points(p, a, b, c):
+    """The nearest point of the triangle abc (each (3,)) to each of the points p : (N, 3).
+
+    Ericson, Real-Time Collision Detection, section 5.1.5 (ClosestPtPointTriangle): the
+    Voronoi regions of the vertices, then of the edges, then the face, tested in that order.
+    Vectorised, every region's answer is computed and the first region that holds wins (they
+    are assigned in reverse order, so an earlier region overwrites a later one).
+    """
+    ab, ac = b - a, c - a
+    ap, bp, cp = p - a, p - b, p - c
+    d1, d2 = ap @ ab, ap @ ac
+    d3, d4 = bp @ ab, bp @ ac
+    d5, d6 = cp @ ab, cp @ ac
+    va, vb, vc = d3 * d6 - d5 * d4, d5 * d2 - d1 * d6, d1 * d4 - d3 * d2
+    with np.errstate(divide="ignore", invalid="ignore"):
+        denominator = va + vb + vc
+        regions = [   # (holds, nearest point), Ericson's order
+            ((d1 <= 0) & (d2 <= 0), np.broadcast_to(a, p.shape)),
+            ((d3 >= 0) & (d4 <= d3), np.broadcast_to(b, p.shape)),
+            ((vc <= 0) & (d1 >= 0) & (d3 <= 0), a + (d1 / (d1 - d3))[:, None] * ab),
+            ((d6 >= 0) & (d5 <= d6), np.broadcast_to(c, p.shape)),
+            ((vb <= 0) & (d2 >= 0) & (d6 <= 0), a + (d2 / (d2 - d6))[:, None] * ac),
+            ((va <= 0) & (d4 - d3 >= 0) & (d5 - d6 >= 0),
+             b + ((d4 - d3) / ((d4 - d3) + (d5 - d6)))[:, None] * (c - b)),
+        ]
+        nearest = a + (vb / denominator)[:, None] * ab + (vc / denominator)[:, None] * ac
+    for holds, point in reversed(regions):
+        nearest = np.where(holds[:, None], point, nearest)
+    return nearest
+
+
+def convex_polyhedron_distance(p, vertices, faces):
+    """Signed distance to a convex polyhedron given as a closed triangle mesh.
+
+    The nearest point of the surface is the nearest of the triangles' nearest points; p is
+    inside where it lies behind the plane of every face (each face's normal turned away from
+    the centroid of the vertices, which a convex solid holds).
+    """
+    centre = vertices.mean(axis=0)
+    nearest = np.full(len(p), np.inf)
+    inside = np.ones(len(p), dtype=bool)
+    for i, j, k in faces:
+        a, b, c = vertices[i], vertices[j], vertices[k]
+        nearest = np.minimum(nearest, np.linalg.norm(p - triangle_closest_points(p, a, b, c),
+                                                     axis=-1))
+        normal = np.cross(b - a, c - a)
+        normal = -normal if (centre - a) @ normal > 0 else normal
+        inside &= (p - a) @ normal <= 0
+    return np.where(inside, -nearest, nearest)
+
+
+def pyramid_mesh(base, height):
+    """Vertices (5, 3) and triangles (6, 3): the base square's corners at y = 0, the apex."""
+    s = base / 2
+    vertices = np.array([[s, 0, s], [-s, 0, s], [-s, 0, -s], [s, 0, -s], [0, height, 0]])
+    faces = np.array([[0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4], [0, 1, 2], [0, 2, 3]])
+    return vertices, faces
+
+
+def hex_prism_mesh(apothem, half_length):
+    """Vertices (12, 3) and triangles (20, 3) of the prism along z whose regular hexagon has
+    its corners at 2 apothem / sqrt(3) from the axis, at 0, 60, ..., 300 degrees from +x
+    (so its flat sides lie at y = +-apothem)."""
+    corner = 2 * apothem / np.sqrt(3)
+    angles = np.radians(np.arange(0, 360, 60))
+    ring = np.column_stack([corner * np.cos(angles), corner * np.sin(angles)])
+    vertices = np.vstack([np.column_stack([ring, np.full(6, z)])
+                          for z in (-half_length, half_length)])
+    caps = [[top + 0, top + k, top + k + 1] for top in (0, 6) for k in range(1, 5)]
+    sides = [[k, (k + 1) % 6, 6 + k] for k in range(6)] + [[(k + 1) % 6, 6 + (k + 1) % 6, 6 + k]
+                                                          for k in range(6)]
+    return vertices, np.array(caps + sides)
+
+
+def pyramid_distance(p, base, height):
+    return convex_polyhedron_distance(p, *pyramid_mesh(base, height))
+
+
+def hex_prism_distance(p, apothem, half_length):
+    return convex_polyhedron_distance(p, *hex_prism_mesh(apothem, half_length))

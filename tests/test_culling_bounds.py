@@ -22,9 +22,10 @@ from test_march import ray_sphere, unit
 from reference_cpu.culling import ray_meets_sphere
 from reference_cpu.scene_sdf import build_scene_sdf
 from scene_model.bounds import bounding_sphere, enclosing_sphere
-from scene_model.shapes import (Box, CappedCylinder, Capsule, Cone, Intersection, Plane, Repeat,
-                                Rotate, RoundBox, Scale, SmoothIntersection, SmoothSubtraction,
-                                SmoothUnion, Sphere, Subtraction, Torus, Translate, Union)
+from scene_model.shapes import (Box, CappedCylinder, Capsule, Cone, Disk, HexPrism, Intersection,
+                                Plane, Pyramid, Repeat, Rotate, RoundBox, Scale,
+                                SmoothIntersection, SmoothSubtraction, SmoothUnion, Sphere,
+                                Subtraction, Torus, Translate, Union)
 
 
 # --- ray_meets_sphere ----------------------------------------------------------------------
@@ -110,6 +111,9 @@ primitive_nodes = st.one_of(
     st.builds(CappedCylinder, size, size),
     capsules(),
     st.builds(Cone, size, size),
+    st.builds(Pyramid, size, size),
+    st.builds(lambda r, f: Disk(r, 2 * r * f), size, st.floats(0.01, 1.0)),
+    st.builds(HexPrism, size, size),
 )
 
 
@@ -160,7 +164,8 @@ def test_bounding_sphere_holds_the_solid_of_any_bounded_tree(node, seed):
 @pytest.mark.parametrize("node", [
     Sphere(0.7), Box((0.3, 0.5, 0.9)), RoundBox((0.4, 0.4, 0.6), 0.2), Torus(1.0, 0.3),
     Torus(0.2, 0.5), CappedCylinder(0.4, 1.2), Capsule((-0.5, 0.2, 0.0), (0.4, 1.0, 0.3), 0.2),
-    Cone(0.6, 1.5),
+    Cone(0.6, 1.5), Pyramid(1.2, 0.7), Pyramid(0.3, 1.5), Disk(0.9, 0.2), Disk(0.5, 1.0),
+    HexPrism(0.6, 0.3), HexPrism(0.2, 1.1),
     Translate(Rotate(Scale(Box((0.2, 0.6, 0.3)), 1.7), (20.0, 35.0, -50.0)), (1.0, -0.5, 2.0)),
     Union((Sphere(0.5), Translate(Box((0.3, 0.3, 0.3)), (1.2, 0.0, 0.0)))),
     Intersection((Sphere(0.8), Box((0.6, 0.6, 0.6)))),

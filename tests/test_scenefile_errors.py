@@ -156,6 +156,27 @@ def test_bad_value_raises_scene_error_naming_file_field_and_problem(tmp_path, wh
     assert "\n" not in message
 
 
+@pytest.mark.parametrize("table, problem", [
+    ('type = "pyramid"\nbase = 0.0', "objects[0].base: must be positive (got 0.0)"),
+    ('type = "pyramid"\nheight = -1.0', "objects[0].height: must be positive (got -1.0)"),
+    ('type = "disk"\nradius = 0.0', "objects[0].radius: must be positive (got 0.0)"),
+    ('type = "disk"\nthickness = -0.1', "objects[0].thickness: must be positive (got -0.1)"),
+    ('type = "disk"\nradius = 0.5\nthickness = 1.5',
+     "objects[0].thickness: must not exceed twice the radius 0.5 (got 1.5)"),
+    ('type = "hex_prism"\napothem = 0.0', "objects[0].apothem: must be positive (got 0.0)"),
+    ('type = "hex_prism"\nhalf_length = -2.0',
+     "objects[0].half_length: must be positive (got -2.0)"),
+], ids=["pyramid_base", "pyramid_height", "disk_radius", "disk_thickness",
+        "disk_thicker_than_wide", "hex_prism_apothem", "hex_prism_half_length"])
+def test_pyramid_disk_and_hex_prism_sizes_are_refused_in_one_line_naming_the_field(
+        tmp_path, table, problem):
+    path = tmp_path / "shape.toml"
+    path.write_text(f"[materials.default]\n\n[[objects]]\n{table}\n")
+    with pytest.raises(SceneError) as caught:
+        load_scene(path)
+    assert str(caught.value) == f"{path}: {problem}"
+
+
 def test_missing_file_raises_scene_error_naming_the_file(tmp_path):
     path = tmp_path / "nowhere.toml"
     with pytest.raises(SceneError) as caught:

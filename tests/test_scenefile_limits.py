@@ -119,6 +119,8 @@ COORDINATE_FIELDS = {"Camera.position", "Camera.look_at", "PointLight.position",
 SIZE_FIELDS = {"Sphere.radius", "Box.half_size", "RoundBox.half_size", "RoundBox.radius",
                "Torus.major_radius", "Torus.minor_radius", "CappedCylinder.radius",
                "CappedCylinder.half_height", "Capsule.radius", "Cone.radius", "Cone.height",
+               "Pyramid.base", "Pyramid.height", "Disk.radius", "Disk.thickness",
+               "HexPrism.apothem", "HexPrism.half_length",
                "SmoothUnion.k", "SmoothIntersection.k", "SmoothSubtraction.k", "Scale.factor",
                "Checker.scale", "Body.radius", "Body.half_size", "Body.half_length"}
 

@@ -21,10 +21,10 @@ from scene_model.bodies import Body, PhysicsSettings
 from scene_model.fields import DIRECTION, Each
 from scene_model.scene import (Camera, Checker, DirectionalLight, Fog, Material, PointLight,
                                RenderSettings, Scene, SkyBackground, SolidBackground, SpotLight)
-from scene_model.shapes import (Box, CappedCylinder, Capsule, Cone, Intersection, Plane, Repeat,
-                                Rotate, RoundBox, Scale, SmoothIntersection, SmoothSubtraction,
-                                SmoothUnion, Sphere, Subtraction, Torus, Translate, Union,
-                                primitives as primitives_of)
+from scene_model.shapes import (Box, CappedCylinder, Capsule, Cone, Disk, HexPrism, Intersection,
+                                Plane, Pyramid, Repeat, Rotate, RoundBox, Scale,
+                                SmoothIntersection, SmoothSubtraction, SmoothUnion, Sphere,
+                                Subtraction, Torus, Translate, Union, primitives as primitives_of)
 
 
 BUNDLED = marchlab.bundled_scene_names()
@@ -151,6 +151,9 @@ def primitive_nodes(material):
         st.builds(CappedCylinder, SIZES, SIZES, material=material),
         valid(Capsule, a=POINTS, b=POINTS, radius=SIZES, material=material),
         st.builds(Cone, SIZES, SIZES, material=material),
+        st.builds(Pyramid, SIZES, SIZES, material=material),
+        valid(Disk, radius=SIZES, thickness=SIZES, material=material),
+        st.builds(HexPrism, SIZES, SIZES, material=material),
     )
 
 

@@ -27,7 +27,8 @@ from hypothesis import strategies as st
 
 from reference_cpu import sdf as S
 from reference_cpu.scene_sdf import build_scene_sdf
-from scene_model.shapes import Box, CappedCylinder, Capsule, Cone, Plane, RoundBox, Sphere, Torus
+from scene_model.shapes import (Box, CappedCylinder, Capsule, Cone, Disk, HexPrism, Plane,
+                                Pyramid, RoundBox, Sphere, Torus)
 
 RELATIVE, ABSOLUTE = 1e-9, 1e-12    # slack for rounding: |f(p) - f(q)| <= |p - q| (1 + 1e-9) + 1e-12
 
@@ -85,7 +86,8 @@ def scene(node):
 def primitives(draw):
     """Any exact primitive with parameters in sensible positive ranges."""
     kind = draw(st.sampled_from(["sphere", "box", "round_box", "plane", "torus",
-                                 "capped_cylinder", "capsule", "cone"]))
+                                 "capped_cylinder", "capsule", "cone", "pyramid", "disk",
+                                 "hex_prism"]))
     if kind == "sphere":
         return Sphere(draw(length))
     if kind == "box":
@@ -103,6 +105,13 @@ def primitives(draw):
         a = draw(point)
         b = draw(point.filter(lambda b: np.linalg.norm(np.subtract(a, b)) > 1e-3))
         return Capsule(a, b, draw(length))
+    if kind == "pyramid":
+        return Pyramid(draw(length), draw(length))
+    if kind == "disk":
+        radius = draw(length)
+        return Disk(radius, draw(st.floats(0.01, 1.0)) * 2 * radius)
+    if kind == "hex_prism":
+        return HexPrism(draw(length), draw(length))
     return Cone(draw(length), draw(length))
 
 
@@ -155,6 +164,21 @@ def test_sdf_capsule_is_1_lipschitz(a, b, radius, pairs):
 @given(radius=length, height=length, pairs=point_pairs())
 def test_sdf_cone_is_1_lipschitz(radius, height, pairs):
     assert_1_lipschitz(lambda p: S.sdf_cone(p, radius, height), *pairs)
+
+
+@given(base=length, height=length, pairs=point_pairs())
+def test_sdf_pyramid_is_1_lipschitz(base, height, pairs):
+    assert_1_lipschitz(lambda p: S.sdf_pyramid(p, base, height), *pairs)
+
+
+@given(radius=length, fraction=st.floats(0, 1), pairs=point_pairs())
+def test_sdf_disk_is_1_lipschitz(radius, fraction, pairs):
+    assert_1_lipschitz(lambda p: S.sdf_disk(p, radius, fraction * 2 * radius), *pairs)
+
+
+@given(apothem=length, half_length=length, pairs=point_pairs())
+def test_sdf_hex_prism_is_1_lipschitz(apothem, half_length, pairs):
+    assert_1_lipschitz(lambda p: S.sdf_hex_prism(p, apothem, half_length), *pairs)
 
 
 # --- Hard CSG: min and max of 1-Lipschitz functions are 1-Lipschitz ------------------------------

@@ -2,10 +2,12 @@
 
 The reference answers here do not reuse Quilez's formulas. Each finds the nearest point of the
 shape from its geometry (clamping to a box, the nearest point of a circle or a segment, a 2-D
-cross-section for shapes of revolution) and measures the distance to it; the sign says whether
+cross-section for shapes of revolution, the nearest of the nearest points of the triangles of a
+pyramid's or a hexagonal prism's mesh) and measures the distance to it; the sign says whether
 the point is inside (tests/sdf_reference.py). Three kinds of points are checked: random points
 far outside, random points inside, and points built on the surface and pushed along the outward
-normal by a known amount, whose distance must be that amount.
+normal by a known amount, whose distance must be that amount. Last, the gradient of every
+primitive has unit length, as a distance's must.
 
 The CSG operators, repetition, rotation and scale, and whole scenes are checked in
 test_sdf_csg.py, test_sdf_repeat.py, test_sdf_rotation_scale.py and test_sdf_scene_ids.py.
@@ -20,7 +22,8 @@ import numpy as np
 import pytest
 from sdf_reference import (EXACT, SINGLE, box_distance, capped_cylinder_distance,
                            capsule_distance_brute_force, capsule_sampling_step, cone_distance,
-                           plane_distance, plane_frame, sphere_distance, torus_distance, unit)
+                           disk_distance, hex_prism_distance, plane_distance, plane_frame,
+                           pyramid_distance, sphere_distance, torus_distance, unit)
 
 from reference_cpu import sdf as S
 
@@ -145,6 +148,93 @@ def cone_surface(radius, height, margin=0.1):
     return sample
 
 
+def turned_about_y(points, quarter_turns):
+    """Each point (N, 3) turned by its own multiple of 90 degrees (N,) about the y axis."""
+    angle = quarter_turns * (np.pi / 2)
+    c, s = np.round(np.cos(angle)), np.round(np.sin(angle))
+    return np.column_stack([c * points[:, 0] + s * points[:, 2], points[:, 1],
+                            -s * points[:, 0] + c * points[:, 2]])
+
+
+def pyramid_surface(base, height, margin=0.05):
+    """Base points (normal -y) at least ``margin`` inside the square, and points of the side
+    faces at least ``margin`` from the face's edges (normal (h, s, 0) / |(h, s)| on the +x
+    face, s = base / 2, turned with the face)."""
+    s = base / 2
+    normal = unit(np.array([height, s, 0.0]))
+
+    def sample(rng, n):
+        base_n = n // 2
+        base_points = np.column_stack([rng.uniform(-(s - margin), s - margin, base_n),
+                                       np.zeros(base_n),
+                                       rng.uniform(-(s - margin), s - margin, base_n)])
+        # The +x face: x = s (1 - v), y = h v, z = s (1 - v) u for v in [0, 1], u in [-1, 1];
+        # keep the points whose distance to each of its three edges is at least the margin.
+        u, v = rng.uniform(-1, 1, 8 * n), rng.uniform(0, 1, 8 * n)
+        face = np.column_stack([s * (1 - v), height * v, s * (1 - v) * u])
+        apex, corners = np.array([0.0, height, 0.0]), np.array([[s, 0, s], [s, 0, -s]])
+        from_edges = np.min([segment_distance_3d(face, a, b) for a, b in
+                             [(corners[0], corners[1]), (corners[0], apex), (corners[1], apex)]],
+                            axis=0)
+        face = face[from_edges >= margin][:n - base_n]
+        turns = rng.integers(0, 4, len(face))
+        points = np.vstack([base_points, turned_about_y(face, turns)])
+        normals = np.vstack([np.tile([0.0, -1.0, 0.0], (base_n, 1)),
+                             turned_about_y(np.tile(normal, (len(face), 1)), turns)])
+        return points, normals
+    return sample
+
+
+def segment_distance_3d(p, a, b):
+    """Distance from the points p (N, 3) to the segment a-b, by clamped projection."""
+    t = np.clip((p - a) @ (b - a) / ((b - a) @ (b - a)), 0, 1)
+    return np.linalg.norm(p - (a + t[:, None] * (b - a)), axis=-1)
+
+
+def disk_surface(radius, thickness, margin=0.05):
+    """Flat faces (normal +-y) at least ``margin`` inside the flat circle of radius
+    a = radius - thickness / 2, and the rounded rim: (a, 0) plus thickness / 2 along a unit
+    vector (cos phi, sin phi) of the (rho, y) half-plane that points outward, its normal."""
+    a, rounding = radius - thickness / 2, thickness / 2
+
+    def sample(rng, n):
+        flat = n // 2
+        up = rng.choice([-1.0, 1.0], flat)
+        flat_points = np.column_stack([rng.uniform(0, a - margin, flat), up * rounding])
+        flat_normals = np.column_stack([np.zeros(flat), up])
+        phi = rng.uniform(-np.pi / 2, np.pi / 2, n - flat)
+        u = np.column_stack([np.cos(phi), np.sin(phi)])
+        return from_half_plane(rng, np.vstack([flat_points, np.array([a, 0.0]) + rounding * u]),
+                               np.vstack([flat_normals, u]))
+    return sample
+
+
+def hex_prism_surface(apothem, half_length, margin=0.05):
+    """Caps (normal +-z) within the circle of radius apothem - margin, which keeps them that far
+    from the sides; side points at least ``margin`` from the side's edges, made on the top side
+    y = apothem (normal +y) and turned about z by a multiple of 60 degrees."""
+    half_side = apothem / np.sqrt(3)
+
+    def sample(rng, n):
+        caps = n // 2
+        r = (apothem - margin) * np.sqrt(rng.uniform(0, 1, caps))
+        theta = rng.uniform(0, 2 * np.pi, caps)
+        end = rng.choice([-1.0, 1.0], caps)
+        cap_points = np.column_stack([r * np.cos(theta), r * np.sin(theta), end * half_length])
+        cap_normals = np.column_stack([np.zeros((caps, 2)), end])
+        side = n - caps
+        top = np.column_stack([rng.uniform(-(half_side - margin), half_side - margin, side),
+                               np.full(side, apothem),
+                               rng.uniform(-(half_length - margin), half_length - margin, side)])
+        angle = rng.integers(0, 6, side) * (np.pi / 3)
+        c, s = np.cos(angle), np.sin(angle)
+        turn = lambda v: np.column_stack([c * v[:, 0] - s * v[:, 1],          # noqa: E731
+                                          s * v[:, 0] + c * v[:, 1], v[:, 2]])
+        side_normals = turn(np.tile([0.0, 1.0, 0.0], (side, 1)))
+        return np.vstack([cap_points, turn(top)]), np.vstack([cap_normals, side_normals])
+    return sample
+
+
 # --- The primitives under test ---------------------------------------------------------------
 
 def cast(p, *values):
@@ -199,6 +289,20 @@ CASES = [
     Case("cone_tall", lambda p: S.sdf_cone(p, *cast(p, 0.5, 2.0)),
          lambda p: cone_distance(p, 0.5, 2.0), ((-0.5, 0, -0.5), (0.5, 2.0, 0.5)),
          cone_surface(0.5, 2.0)),
+    # The pyramid and the hexagonal prism against the nearest point of their triangle meshes.
+    Case("pyramid_wide", lambda p: S.sdf_pyramid(p, *cast(p, 1.6, 1.0)),
+         lambda p: pyramid_distance(p, 1.6, 1.0), ((-0.8, 0, -0.8), (0.8, 1.0, 0.8)),
+         pyramid_surface(1.6, 1.0)),
+    Case("pyramid_tall", lambda p: S.sdf_pyramid(p, *cast(p, 0.8, 1.6)),
+         lambda p: pyramid_distance(p, 0.8, 1.6), ((-0.4, 0, -0.4), (0.4, 1.6, 0.4)),
+         pyramid_surface(0.8, 1.6)),
+    Case("disk", lambda p: S.sdf_disk(p, *cast(p, 1.2, 0.3)),
+         lambda p: disk_distance(p, 1.2, 0.3), around(1.2, 0.15, 1.2), disk_surface(1.2, 0.3)),
+    Case("disk_sphere", lambda p: S.sdf_disk(p, *cast(p, 0.9, 1.8)),       # thickness 2 radius
+         lambda p: sphere_distance(p, 0.9), around(0.9, 0.9, 0.9), sphere_surface(0.9)),
+    Case("hex_prism", lambda p: S.sdf_hex_prism(p, *cast(p, 0.7, 0.9)),
+         lambda p: hex_prism_distance(p, 0.7, 0.9), around(0.7 * 2 / np.sqrt(3), 0.7, 0.9),
+         hex_prism_surface(0.7, 0.9)),
 ]
 CASE_IDS = [case.name for case in CASES]
 
@@ -279,3 +383,45 @@ def test_cone_points_beyond_apex_and_rim_are_at_distance_to_them_within_1e_12():
     for h in pushes:
         points, _ = from_half_plane(rng, np.array([radius, 0.0]) + h * u, u)
         np.testing.assert_allclose(S.sdf_cone(points, radius, height), h, rtol=0, atol=EXACT)
+
+
+def test_pyramid_below_and_inside_next_to_its_base_is_the_distance_to_the_base_within_1e_12():
+    """The base face, which Quilez's sdPyramid leaves out: below y = 0 the nearest point is the
+    point clamped into the base square; inside, within 0.05 of the base and 0.4 of the axis
+    (over 0.28 from every side), the base is nearest, at distance y."""
+    base, height = 1.6, 1.0
+    half = np.array([base / 2, 0.0, base / 2])
+    rng = np.random.default_rng(8)
+    depth = 10 ** rng.uniform(-9, 0.5, 600)
+    below = np.column_stack([rng.uniform(-2, 2, 600), -depth, rng.uniform(-2, 2, 600)])
+    expected = np.linalg.norm(below - np.clip(below, -half, half), axis=-1)
+    np.testing.assert_allclose(S.sdf_pyramid(below, base, height), expected, rtol=0, atol=EXACT)
+    inside = np.column_stack([rng.uniform(-0.4, 0.4, 600), depth * 0.05 / depth.max(),
+                              rng.uniform(-0.4, 0.4, 600)])
+    np.testing.assert_allclose(S.sdf_pyramid(inside, base, height), -inside[:, 1], rtol=0,
+                               atol=EXACT)
+
+
+def test_pyramid_points_above_apex_are_at_distance_to_it_within_1e_12():
+    """On the axis above the apex the nearest point is the apex."""
+    pushes = np.array([0.0, 1e-9, 1e-6, 1e-3, 0.1, 2.0])
+    points = np.column_stack([np.zeros(6), 1.3 + pushes, np.zeros(6)])
+    np.testing.assert_allclose(S.sdf_pyramid(points, 0.9, 1.3), pushes, rtol=0, atol=EXACT)
+
+
+# --- Exactness: the gradient of a distance has unit length ------------------------------------
+
+GRADIENT_STEP = 1e-6
+
+
+@pytest.mark.parametrize("case", CASES, ids=CASE_IDS)
+def test_gradient_has_unit_length_within_1e_6(case):
+    """|grad f| = 1 wherever an exact distance is differentiable: everywhere but the medial
+    axis (inside, where two faces are equally near; a torus's axis), which seeded random points
+    miss. Central differences with step 1e-6 err by ~1e-12 / (radius of curvature)^2 from
+    truncation and ~1e-9 from rounding, so 1e-6 is ample; a bound that is not a distance (a
+    scaled distance, a max of unnormalised planes) misses it by far more."""
+    p = far_and_inside_points(np.random.default_rng(7), case.bounds)
+    gradient = np.column_stack([(case.sdf(p + e) - case.sdf(p - e)) / (2 * GRADIENT_STEP)
+                                for e in np.eye(3) * GRADIENT_STEP])
+    np.testing.assert_allclose(np.linalg.norm(gradient, axis=1), 1.0, rtol=0, atol=1e-6)

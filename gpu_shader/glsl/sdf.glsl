@@ -86,6 +86,69 @@ real sdf_cone(vec3 p, real radius, real height)
     return sqrt(d2) * inside;
 }
 
+// Square pyramid along y, base of side `base` on y = 0, apex at y = height: Quilez's exact
+// pyramid in true lengths, with the base face added (see reference_cpu/sdf.py). Folded onto
+// 0 <= z <= x and measured from the base corner, the distance is Pythagoras' sum of the
+// height above the +x face's plane and the in-plane distance to the half face.
+real sdf_pyramid(vec3 p, real base, real height)
+{
+    real s = 0.5 * base;
+    real h = height;
+    real ax = abs(p.x);
+    real az = abs(p.z);
+    real x = max(ax, az) - s;
+    real z = min(ax, az) - s;
+    real y = p.y;
+    real slant = sqrt(h * h + s * s);
+    real above = (h * x + s * y) / slant;
+    real up = (h * y - s * x) / slant;
+    real edge = max(z, 0.0);
+    real edge2 = edge * edge + up * up;
+    real t = clamp((slant * up - s * z) / (s * s + slant * slant), 0.0, 1.0);
+    real ex = z + s * t;
+    real ey = up - slant * t;
+    bool on_face = min(up, -(slant * z + s * up)) > 0.0;
+    real d2 = on_face ? 0.0 : min(edge2, ex * ex + ey * ey);
+    real sides = sqrt(d2 + above * above) * sign(max(above, -y));
+    // Below the base plane the nearest point is on the base square.
+    real bx = max(x, 0.0);
+    real bz = max(z, 0.0);
+    real below = sqrt(bx * bx + bz * bz + y * y);
+    return y < 0.0 ? below : max(sides, -y);
+}
+
+// Round disk in the xz-plane: the distance to the flat circle of radius
+// radius - thickness / 2 in y = 0, minus the rounding thickness / 2.
+real sdf_disk(vec3 p, real radius, real thickness)
+{
+    real rounding = 0.5 * thickness;
+    real rim = length2(p.x, p.z) - (radius - rounding);
+    return length2(max(rim, 0.0), p.y) - rounding;
+}
+
+// Hexagonal prism along z, flat sides of the hexagon at y = +-apothem: Quilez's
+// sdHexPrism. Folded into x, y >= 0 and mirrored across the 60 degree line (normal
+// (-cos 30, 1/2)), the hexagon's distance is that to its top side; the extrusion along z
+// combines it with |z| - half_length like a 2-D box.
+real sdf_hex_prism(vec3 p, real apothem, real half_length)
+{
+    real cos30 = 0.8660254037844386;
+    real tan30 = 0.5773502691896258;
+    real x = abs(p.x);
+    real y = abs(p.y);
+    real z = abs(p.z);
+    real fold = 2.0 * min(-cos30 * x + 0.5 * y, 0.0);
+    x = x + fold * cos30;
+    y = y - fold * 0.5;
+    real half_side = tan30 * apothem;
+    real dy = y - apothem;
+    real hexagon = length2(x - clamp(x, -half_side, half_side), dy) * sign(dy);
+    real along = z - half_length;
+    real outside = length2(max(hexagon, 0.0), max(along, 0.0));
+    real inside = min(max(hexagon, along), 0.0);
+    return inside + outside;
+}
+
 // --- Combining distances (CSG) ------------------------------------------------------------
 
 // Points inside either shape: the nearer distance. Unions, intersections and subtractions

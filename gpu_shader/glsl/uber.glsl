@@ -56,6 +56,12 @@ real shape_sdf(int shape, vec3 q, vec4 a, vec4 b)
         return sdf_capsule(q, a.xyz, b.xyz, a.w);
     case SHAPE_CONE:
         return sdf_cone(q, a.x, a.y);
+    case SHAPE_PYRAMID:
+        return sdf_pyramid(q, a.x, a.y);
+    case SHAPE_DISK:
+        return sdf_disk(q, a.x, a.y);
+    case SHAPE_HEX_PRISM:
+        return sdf_hex_prism(q, a.x, a.y);
     }
     return INFINITY;
 }

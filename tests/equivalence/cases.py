@@ -13,8 +13,8 @@ import dataclasses
 from marchlab import load_scene
 from scene_model.builder import (Camera, Checker, DirectionalLight, Fog, Material, PointLight,
                                  RenderSettings, Scene, SkyBackground, SolidBackground, SpotLight,
-                                 box, capped_cylinder, capsule, cone, plane, round_box, sphere,
-                                 torus)
+                                 box, capped_cylinder, capsule, cone, disk, hex_prism, plane,
+                                 pyramid, round_box, sphere, torus)
 from scene_model.scenefile import bundled_scene_names
 
 SIZE = (64, 48)            # feature cases: small enough for CI, large enough to see edges
@@ -59,6 +59,9 @@ def feature_cases() -> dict[str, Scene]:
         "capped_cylinder": base_scene([capped_cylinder(0.5, 0.7).rotate(0, 0, 20).at(0, 0.9, 0)]),
         "capsule": base_scene([capsule((-0.6, 0.3, 0), (0.6, 1.1, 0.2), 0.3)]),
         "cone": base_scene([cone(0.7, 1.4)]),
+        "pyramid": base_scene([pyramid(1.4, 1.3).rotate(0, 25, 0)]),
+        "disk": base_scene([disk(0.85, 0.16).rotate(55, 0, 20).at(0, 0.9, 0)]),
+        "hex_prism": base_scene([hex_prism(0.55, 0.7).rotate(0, 35, 0).at(0, 0.55, 0)]),
         "scale": base_scene([box(0.5).scale(1.6).at(*at)]),
         # each operator
         "union": base_scene([sphere(0.6).at(-0.4, 0.7, 0) | box(0.5).at(0.5, 0.6, 0)]),

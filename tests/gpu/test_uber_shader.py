@@ -23,7 +23,7 @@ from gpu_shader.uber import (OBJECTS_START, OBJECT_STRIDE, ROWS, SHAPES, SHAPE_R
 from marchlab import MarchlabError, load_scene
 import marchlab
 from scene_model.builder import (DirectionalLight, Fog, Scene, SolidBackground, SpotLight, box,
-                                 sphere)
+                                 disk, hex_prism, pyramid, sphere)
 from scene_model.shapes import Primitive, Rotate, Scale, Translate
 
 BUNDLED = ("classroom", "lights", "primitives")
@@ -51,6 +51,17 @@ def scaled_scene() -> Scene:
     return dataclasses.replace(classroom, objects=objects)
 
 
+def newer_primitives_scene() -> Scene:
+    """The primitives scene's floor and lights with a pyramid, a disk and a hexagonal prism,
+    which the bundled scenes do not hold."""
+    scene = load_scene("primitives")
+    objects = scene.objects[:1] + (
+        pyramid(1.2, 1.3, material="a").rotate(0, 20, 0).at(-2.0, 0.0, 0.0),
+        disk(0.7, 0.16, material="b").rotate(70, 30, 0).at(0.0, 0.65, 0.0),
+        hex_prism(0.45, 0.6, material="c").rotate(0, 30, 0).at(2.0, 0.45, 0.0))
+    return dataclasses.replace(scene, objects=objects)
+
+
 # Each variant changes one thing of a bundled scene; its name says which feature it checks.
 VARIANTS = {
     "blinn_phong": lambda: with_settings(load_scene("classroom"), shading="blinn_phong"),
@@ -71,6 +82,7 @@ VARIANTS = {
                                               background=SolidBackground(color=(0.1, 0.2, 0.3))),
     "bounding_spheres": lambda: with_settings(load_scene("primitives"), bounding_spheres=True),
     "scale_transforms": scaled_scene,
+    "pyramid_disk_hex_prism": newer_primitives_scene,
     "no_objects": lambda: dataclasses.replace(load_scene("lights"), objects=()),
 }
 

@@ -166,6 +166,64 @@ def cone_case(rng):
     return [p, radius, height]
 
 
+def pyramid_case(rng):
+    base = per_packet(mix(rng, rng.uniform(0.2, 3.0, BLOCKS), 1.0))
+    height = per_packet(mix(rng, rng.uniform(0.05, 3.0, BLOCKS), 1.0))
+    s = base / 2
+    # The +x face (x = s (1 - v), y = h v, z = s (1 - v) u), its edges and apex, the base and
+    # a base corner; then mirrored and swapped onto the other faces.
+    u = mix(rng, rng.uniform(-1, 1, (ROWS, 1)), 1.0, -1.0, 0.0)
+    v = mix(rng, rng.uniform(0, 1, (ROWS, 1)), 0.0, 1.0)
+    face = np.hstack([s * (1 - v), height * v, s * (1 - v) * u])
+    bottom = np.hstack([s * rng.uniform(-1, 1, (ROWS, 1)), 0 * s,
+                        s * rng.uniform(-1, 1, (ROWS, 1))])
+    surface = mix(rng, face, bottom, np.hstack([s, 0 * s, s]))
+    surface[:, [0, 2]] *= rng.choice([-1.0, 1.0], (ROWS, 2))
+    swap = rng.random(ROWS) < 0.5
+    surface[swap] = surface[swap][:, [2, 1, 0]]
+    # below the base, where the base square is nearest
+    below = np.hstack([s * rng.uniform(-2, 2, (ROWS, 1)), -s * rng.uniform(0, 1, (ROWS, 1)),
+                       s * rng.uniform(-2, 2, (ROWS, 1))])
+    return [mix(rng, on_surface(rng, anywhere(rng), surface), below), base, height]
+
+
+def disk_case(rng):
+    radius = rng.uniform(0.1, 2.0, BLOCKS)
+    thickness = 2 * radius * mix(rng, rng.uniform(0.01, 1, BLOCKS), 1.0)   # 1.0: a sphere
+    radius, thickness = per_packet(radius), per_packet(thickness)
+    return [disk_points(rng, radius, thickness), radius, thickness]
+
+
+def disk_points(rng, radius, thickness):
+    """Flat faces, the rounded rim, the flat circle's rim and its centre."""
+    a, rounding = radius - thickness / 2, thickness / 2
+    theta, phi = rng.uniform(0, 2 * np.pi, (2, ROWS, 1))
+    phi = (phi - np.pi) / 2                                 # -pi/2..pi/2: the outer half
+    rho = a + rounding * np.cos(phi)
+    rim = np.hstack([rho * np.cos(theta), rounding * np.sin(phi), rho * np.sin(theta)])
+    r = a * rng.uniform(0, 1, (ROWS, 1))
+    flat = np.hstack([r * np.cos(theta), rng.choice([-1.0, 1.0], (ROWS, 1)) * rounding,
+                      r * np.sin(theta)])
+    core = np.hstack([a * np.cos(theta), 0 * a, a * np.sin(theta)])
+    return mix(rng, on_surface(rng, anywhere(rng), mix(rng, rim, flat)), core, 0.0)
+
+
+def hex_prism_case(rng):
+    apothem = per_packet(rng.uniform(0.1, 2.0, BLOCKS))
+    half_length = per_packet(rng.uniform(0.1, 2.0, BLOCKS))
+    # the top side y = apothem, its corners, the caps; turned about z by k 60 degrees
+    half_side = apothem / np.sqrt(3)
+    top = np.hstack([half_side * mix(rng, rng.uniform(-1, 1, (ROWS, 1)), 1.0, -1.0), apothem,
+                     half_length * mix(rng, rng.uniform(-1, 1, (ROWS, 1)), 1.0, -1.0)])
+    cap = np.hstack([apothem * rng.uniform(-1, 1, (ROWS, 2)) * 0.8,
+                     half_length * rng.choice([-1.0, 1.0], (ROWS, 1))])
+    angle = rng.integers(0, 6, (ROWS, 1)) * (np.pi / 3)
+    c, s = np.cos(angle), np.sin(angle)
+    side = np.hstack([c * top[:, :1] - s * top[:, 1:2], s * top[:, :1] + c * top[:, 1:2],
+                      top[:, 2:]])
+    return [on_surface(rng, anywhere(rng), mix(rng, side, cap)), apothem, half_length]
+
+
 def distance_pair_case(rng):
     d1, d2 = distances(rng)
     return [d1[:, None], d2[:, None]]
@@ -304,6 +362,9 @@ CASES = [
     Case("sdf", "sdf_capped_cylinder", ("vec3p", "real", "real"), "packet", cylinder_case),
     Case("sdf", "sdf_capsule", ("vec3p", "vec3", "vec3", "real"), "packet", capsule_case),
     Case("sdf", "sdf_cone", ("vec3p", "real", "real"), "packet", cone_case),
+    Case("sdf", "sdf_pyramid", ("vec3p", "real", "real"), "packet", pyramid_case),
+    Case("sdf", "sdf_disk", ("vec3p", "real", "real"), "packet", disk_case),
+    Case("sdf", "sdf_hex_prism", ("vec3p", "real", "real"), "packet", hex_prism_case),
     *[Case("sdf", name, ("packet", "packet"), "packet", distance_pair_case)
       for name in ("op_union", "op_intersection", "op_subtraction")],
     *[Case("sdf", name, ("packet", "packet", "real"), "packet", smooth_case)
