@@ -66,3 +66,45 @@ def position_difference(gpu, cpu) -> float:
     """The largest |x_gpu - x_cpu| (m) over two trajectories recorded at the same steps."""
     np.testing.assert_array_equal(gpu.steps, cpu.steps)
     return float(np.abs(gpu.positions.astype(np.float64) - cpu.positions).max())
+
+
+SHAPE_PROGRAM = """#version 430
+layout(local_size_x = 64) in;
+#define real float
+{shapes}
+layout(std430, binding = 1) buffer Points {{ vec4 points[]; }};
+layout(std430, binding = 2) buffer Results {{ vec4 results[]; }};
+uniform int u_count;
+void main() {{
+    int i = int(gl_GlobalInvocationID.x);
+    if (i >= u_count) return;
+    vec3 p = points[i].xyz;
+{outputs}
+}}
+"""
+
+
+def evaluate_shape_code(source, parameters, points, outputs):
+    """Run the physics step's generated shape code (``source``, with its parameter block
+    ``parameters``) at ``points`` (N, 3) on the GPU: each of ``outputs``, GLSL vec4
+    expressions of p such as ``"vec4(shape_normal(0, p), 0.0)"``, per point. (N, K, 4)."""
+    from gpu_shader.context import gl_context
+    count = len(outputs)
+    lines = "\n".join(f"    results[{count} * i + {k}] = {expression};"
+                       for k, expression in enumerate(outputs))
+    ctx = gl_context()
+    with ctx:
+        program = ctx.compute_shader(SHAPE_PROGRAM.format(shapes=source, outputs=lines))
+        padded = np.zeros((len(points), 4), np.float32)
+        padded[:, :3] = points
+        buffers = [ctx.buffer(padded.tobytes()), ctx.buffer(reserve=16 * count * len(points)),
+                   ctx.buffer(np.asarray(parameters, np.float32).tobytes())]
+        buffers[0].bind_to_storage_buffer(1)
+        buffers[1].bind_to_storage_buffer(2)
+        buffers[2].bind_to_uniform_block(0)
+        program["u_count"].value = len(points)
+        program.run((len(points) + 63) // 64)
+        results = np.frombuffer(buffers[1].read(), np.float32).reshape(-1, count, 4)
+        for buffer in buffers + [program]:
+            buffer.release()
+    return results

@@ -29,7 +29,6 @@ import math
 import numpy as np
 import pytest
 
-from gpu_shader.context import gl_context
 from gpu_shader.physics import world_shape_code
 from gpu_shader.physics_shapes import pose_rows
 import physics
@@ -40,7 +39,7 @@ from scene_model.builder import (Body, Material, PhysicsSettings, Scene, box, ca
                                  plane)
 from scene_model.motion import Motion, motion_pose
 
-from .conftest import contact_steps, position_difference
+from .conftest import contact_steps, evaluate_shape_code, position_difference
 
 TOLERANCE = 1e-4               # m, at every recorded step
 G = 9.81
@@ -227,24 +226,6 @@ def test_gpu_ball_on_a_keyframed_rising_platform_rides_it_then_flies_on_when_it_
 
 # --- the generated code of a moving shape -----------------------------------------------
 
-EVALUATE = """#version 430
-layout(local_size_x = 64) in;
-#define real float
-{shapes}
-layout(std430, binding = 1) buffer Points {{ vec4 points[]; }};
-layout(std430, binding = 2) buffer Results {{ vec4 results[]; }};
-uniform int u_count;
-void main() {{
-    int i = int(gl_GlobalInvocationID.x);
-    if (i >= u_count) return;
-    vec3 p = points[i].xyz;
-    results[3 * i] = vec4(shape_distance(0, p), shape_surface(0, p), 0.0);
-    results[3 * i + 1] = vec4(shape_normal(0, p), 0.0);
-    results[3 * i + 2] = vec4(shape_velocity(0, p), 0.0);
-}}
-"""
-
-
 def evaluate_moving_shape_on_gpu(scene, t, points):
     """shape_distance, shape_surface's restitution, shape_normal and shape_velocity of the
     first shape of ``scene``, placed where its motion has it at time ``t`` as GpuStepper
@@ -255,21 +236,9 @@ def evaluate_moving_shape_on_gpu(scene, t, points):
     parameters = code.parameters.copy()
     pose = pose_rows(scene.motions[0], t)
     parameters[code.pose_rows[0]:code.pose_rows[0] + len(pose)] = pose
-    ctx = gl_context()
-    with ctx:
-        program = ctx.compute_shader(EVALUATE.format(shapes=code.source))
-        padded = np.zeros((len(points), 4), np.float32)
-        padded[:, :3] = points
-        buffers = [ctx.buffer(padded.tobytes()), ctx.buffer(reserve=48 * len(points)),
-                   ctx.buffer(parameters.tobytes())]
-        buffers[0].bind_to_storage_buffer(1)
-        buffers[1].bind_to_storage_buffer(2)
-        buffers[2].bind_to_uniform_block(0)
-        program["u_count"].value = len(points)
-        program.run((len(points) + 63) // 64)
-        results = np.frombuffer(buffers[1].read(), np.float32).reshape(-1, 3, 4)
-        for buffer in buffers + [program]:
-            buffer.release()
+    results = evaluate_shape_code(code.source, parameters, points, [
+        "vec4(shape_distance(0, p), shape_surface(0, p), 0.0)",
+        "vec4(shape_normal(0, p), 0.0)", "vec4(shape_velocity(0, p), 0.0)"])
     return results[:, 0, 0], results[:, 0, 1], results[:, 1, :3], results[:, 2, :3]
 
 

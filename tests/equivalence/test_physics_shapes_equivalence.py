@@ -36,7 +36,7 @@ from reference_cpu.scene_sdf import build_scene_sdf
 from required_backends import need_backend
 from scene_model.builder import (Body, Material, PhysicsSettings, Scene, box, capped_cylinder,
                                   plane, sphere)
-from .conftest import contact_steps, position_difference
+from .conftest import contact_steps, evaluate_shape_code, position_difference
 
 TOLERANCE = 1e-4               # m, at every recorded step
 R = 0.1                        # radius of the balls (m)
@@ -199,43 +199,13 @@ def test_gpu_stepper_refuses_a_world_with_shapes_but_no_scene_objects_in_one_lin
 
 # --- the generated SDF itself --------------------------------------------------------------
 
-EVALUATE = """#version 430
-layout(local_size_x = 64) in;
-#define real float
-{shapes}
-layout(std430, binding = 1) buffer Points {{ vec4 points[]; }};
-layout(std430, binding = 2) buffer Results {{ vec4 results[]; }};
-uniform int u_count;
-void main() {{
-    int i = int(gl_GlobalInvocationID.x);
-    if (i >= u_count) return;
-    vec3 p = points[i].xyz;
-    results[2 * i] = vec4(shape_distance(0, p), shape_surface(0, p), 0.0);
-    results[2 * i + 1] = vec4(shape_normal(0, p), 0.0);
-}}
-"""
-
-
 def evaluate_on_gpu(world, scene, points):
     """shape_distance, shape_surface's restitution and shape_normal of the world's first
     shape at ``points`` (N, 3), on the GPU."""
     node = shape_objects(scene)[0]
     code = world_shape_code(world, [node], [primitive_coefficients(node, scene, scene.physics)])
-    ctx = gl_context()
-    with ctx:
-        program = ctx.compute_shader(EVALUATE.format(shapes=code.source))
-        padded = np.zeros((len(points), 4), np.float32)
-        padded[:, :3] = points
-        buffers = [ctx.buffer(padded.tobytes()), ctx.buffer(reserve=32 * len(points)),
-                   ctx.buffer(code.parameters.tobytes())]
-        buffers[0].bind_to_storage_buffer(1)
-        buffers[1].bind_to_storage_buffer(2)
-        buffers[2].bind_to_uniform_block(0)
-        program["u_count"].value = len(points)
-        program.run((len(points) + 63) // 64)
-        results = np.frombuffer(buffers[1].read(), np.float32).reshape(-1, 2, 4)
-        for buffer in buffers + [program]:
-            buffer.release()
+    results = evaluate_shape_code(code.source, code.parameters, points, [
+        "vec4(shape_distance(0, p), shape_surface(0, p), 0.0)", "vec4(shape_normal(0, p), 0.0)"])
     return results[:, 0, 0], results[:, 0, 1], results[:, 1, :3]
 
 
