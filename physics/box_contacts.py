@@ -60,6 +60,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from physics.solids import segments_closest
+
 RELATIVE_TOLERANCE = 0.05     # face preference: fraction of |separation| ...
 ABSOLUTE_TOLERANCE = 0.01     # ... plus this fraction of the smallest half extent
 PARALLEL_TOLERANCE = 1e-6     # |e_a x e_b| below this: parallel edges, no edge axis
@@ -228,21 +230,6 @@ def _face_contacts(axis, boxes, reach, tolerance):
     return points, np.tile(normal, (len(points), 1)), depth[near], features
 
 
-def closest_points_on_segments(p1, q1, p2, q2):
-    """The closest points of segments p1-q1 and p2-q2, which must not be parallel
-    (Ericson, Real-Time Collision Detection, 2005, sec. 5.1.9). Returns two (3,) points."""
-    d1, d2, r = q1 - p1, q2 - p2, p1 - p2
-    a, e, b = d1 @ d1, d2 @ d2, d1 @ d2
-    c, f = d1 @ r, d2 @ r
-    s = np.clip((b * f - c * e) / (a * e - b * b), 0, 1)
-    t = (b * s + f) / e
-    if t < 0:
-        t, s = 0, np.clip(-c / a, 0, 1)
-    elif t > 1:
-        t, s = 1, np.clip((b - c) / a, 0, 1)
-    return p1 + s * d1, p2 + t * d2
-
-
 def _edge_contact(axis_index, axis, separation, boxes):
     """One contact between the supporting edges of a and b on edge axis 6-14."""
     (centre_a, rotation_a, half_a), (centre_b, rotation_b, half_b) = boxes
@@ -255,7 +242,11 @@ def _edge_contact(axis_index, axis, separation, boxes):
     edge_b = 4 * j + int(high[(j + 1) % 3]) + 2 * int(high[(j + 2) % 3])
     segment_a = box_edges(centre_a, rotation_a, half_a)[edge_a]
     segment_b = box_edges(centre_b, rotation_b, half_b)[edge_b]
-    on_a, on_b = closest_points_on_segments(*segment_a, *segment_b)
+    # The nearest points of the two edges (Ericson, Real-Time Collision Detection, 5.1.9).
+    (start_a, end_a), (start_b, end_b) = segment_a, segment_b
+    s, t = segments_closest(start_a[None], end_a[None], start_b[None], end_b[None])
+    on_a = start_a + s[0] * (end_a - start_a)
+    on_b = start_b + t[0] * (end_b - start_b)
     return (((on_a + on_b) / 2)[None, :], normal[None, :],
             np.array([separation], dtype=axis.dtype),
             np.array([EDGE_FEATURE_BASE + 12 * edge_a + edge_b], dtype=np.int64))

@@ -24,7 +24,7 @@ from physics.impulses import SolverBodies
 from physics.integrators import INTEGRATORS, integrate_velocities, parabola_start_velocity
 from physics.point_solver import PointBodies, solve_points
 from physics.quaternions import rotate_orientations
-from physics.solid_contacts import (find_solid_contacts, join_point_contacts,
+from physics.solid_contacts import (PointContacts, find_solid_contacts, join_point_contacts,
                                     sphere_point_contacts, with_levers)
 from physics.solids import (BOX, CAPSULE, KIND_NAMES, SPHERE, free_rotation, principal_inertia,
                             volume, world_inertia, world_inverse_inertia)
@@ -516,11 +516,12 @@ class World:
                                f"has solver {self.solver!r})")
         every = with_levers(join_point_contacts(sphere_contacts, solid_contacts),
                             self.position)
-        tensors = np.concatenate([self.inverse_inertia_tensor(),
-                                  np.zeros((1, 3, 3), self.dtype)]).astype(self.dtype)
-        tensors[:n][self.kind == SPHERE] = (self.inverse_inertia[self.kind == SPHERE, None, None]
-                                            * np.eye(3, dtype=self.dtype))
-        tensors[:n][~self.active] = 0
+        # I^-1 is 1/I times the identity for a sphere; only a box's or capsule's turns with it.
+        tensors = np.zeros((n + 1, 3, 3), self.dtype)
+        tensors[:n] = self.inverse_inertia[:, None, None] * np.eye(3, dtype=self.dtype)
+        solid = np.flatnonzero(self.kind != SPHERE)
+        tensors[solid] = world_inverse_inertia(self.orientation[solid],
+                                               self.principal_inertia[solid])
         points = PointBodies(bodies.velocity, bodies.spin, bodies.inverse_mass, tensors)
         gravity_part = np.where(every.static, h * dot(every.normal, self.gravity), 0)
         warm = warm_start(every.key, self._resting_impulses, self.dtype)
@@ -532,12 +533,12 @@ class World:
         return every, collisions
 
     def _record(self, contacts, collisions, hits) -> None:
-        at_points = not hasattr(contacts, "radius_a")      # PointContacts name their kinds
+        # Point contacts hold their kinds and others as arrays; sphere contacts derive them.
+        at_points = isinstance(contacts, PointContacts)
+        kinds = contacts.kind if at_points else contacts.kind()
+        others = contacts.other if at_points else contacts.other()
         for index, approach, impulse in collisions:
-            self._add_events(contacts.kind[index] if at_points else contacts.kind()[index],
-                             contacts.a[index],
-                             contacts.other[index] if at_points else contacts.other()[index],
-                             approach, impulse)
+            self._add_events(kinds[index], contacts.a[index], others[index], approach, impulse)
         planes = len(self.plane_offset)
         for body, static, approach, impulse in hits:
             self._add_events(np.where(static < planes, "sphere-plane", "sphere-shape"), body,

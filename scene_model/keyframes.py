@@ -24,15 +24,21 @@ import numpy as np
 
 from .errors import SceneError
 from .fields import COORDINATE, Range, Record, Rule, Vec3, param
+from .geometry import axis_angle_matrix
 
-MAX_KEY_TIME = 1e6           # s: as scene_model.motion
-MIN_KEY_GAP = 1e-3           # s
+MAX_KEY_TIME = 1e6           # s: the latest key time, as the longest period of a motion
+MIN_KEY_GAP = 1e-3           # s: keys closer than this would need a speed beyond any step
+KEY_TIMES = Rule(lambda v: all(0 <= t <= MAX_KEY_TIME for t in v),
+                 f"must be between 0 and {MAX_KEY_TIME:g} s", f"each in [0, {MAX_KEY_TIME:g}]")
 
 
-def _key_times(values) -> str | None:
-    if not all(0 <= t <= MAX_KEY_TIME for t in values):
-        return f"must be between 0 and {MAX_KEY_TIME:g} s"
-    return None
+def check_key_times(times) -> None:
+    """Raise `SceneError` naming ``times[i]`` where key i is not at least MIN_KEY_GAP after
+    key i - 1 (the keyframes here and a keyframed `scene_model.motion.Motion` alike)."""
+    for index, (early, late) in enumerate(zip(times, times[1:])):
+        if late - early < MIN_KEY_GAP:
+            raise SceneError(f"must increase by at least {MIN_KEY_GAP:g} s from key to key "
+                             f"(got {early!r} then {late!r})", ("times", index + 1))
 
 
 @dataclass(frozen=True)
@@ -42,9 +48,7 @@ class Keyframes(Record):
                                      "objects[1].radius, lights[0].position, ...")
     times: tuple[float, ...] = param((0.0, 1.0), "Key times (s), increasing, at least "
                                                  f"{MIN_KEY_GAP:g} s apart.",
-                                     Rule(lambda v: _key_times(v) is None,
-                                          f"must be between 0 and {MAX_KEY_TIME:g} s",
-                                          f"each in [0, {MAX_KEY_TIME:g}]"))
+                                     KEY_TIMES)
     values: tuple[float, ...] = param((), "The value at each key time, for a number field.",
                                       Rule(lambda v: all(COORDINATE(x) is None for x in v),
                                            "must be within +-1e6", "each in [-1e6, 1e6]"))
@@ -61,10 +65,7 @@ class Keyframes(Record):
     def check(self):
         if len(self.times) < 1:
             raise SceneError("needs at least one key time", ("times",))
-        for index, (early, late) in enumerate(zip(self.times, self.times[1:])):
-            if late - early < MIN_KEY_GAP:
-                raise SceneError(f"must increase by at least {MIN_KEY_GAP:g} s from key to "
-                                 f"key (got {early!r} then {late!r})", ("times", index + 1))
+        check_key_times(self.times)
         given = [name for name in ("values", "vectors") if getattr(self, name)]
         if len(given) != 1:
             raise SceneError("give the key values as values (numbers) or vectors (three "
@@ -125,6 +126,5 @@ def orbit_position(position, look_at, up, orbit: Orbit, t: float) -> tuple:
     axis = np.asarray(up, np.float64) / math.sqrt(float(np.dot(up, up)))
     arm = np.asarray(position, np.float64) - np.asarray(look_at, np.float64)
     angle = 2 * math.pi * (t - orbit.start) / orbit.period
-    turned = (arm * math.cos(angle) + np.cross(axis, arm) * math.sin(angle)
-              + axis * float(axis @ arm) * (1 - math.cos(angle)))
+    turned = axis_angle_matrix(angle * axis) @ arm
     return tuple(float(c) for c in np.asarray(look_at, np.float64) + turned)

@@ -35,12 +35,10 @@ from typing import Literal
 from .errors import SceneError
 from .fields import MAX_DEGREES, POINT, Each, Range, Record, Rule, Vec3, param
 from .geometry import axis_angle_matrix, rotation_matrix, rotation_vector
-from .keyframes import key_fraction
+from .keyframes import KEY_TIMES, MIN_KEY_GAP, check_key_times, key_fraction
 from .shapes import Node, Rotate, Translate
 
 MAX_SPIN = 36000.0           # degrees per second: 100 turns a second
-MAX_KEY_TIME = 1e6           # s: the latest key time, as the longest period
-MIN_KEY_GAP = 1e-3           # s: keys closer than this would need a speed beyond any step
 MAX_OFFSET = 1e3             # m: as the amplitude
 
 
@@ -61,9 +59,7 @@ class Motion(Record):
                           Range(1e-3, 1e6, positive=True))
     times: tuple[float, ...] = param((), "Key times (s), increasing, at least "
                                          f"{MIN_KEY_GAP:g} s apart; empty: no keyframes.",
-                                     Rule(lambda v: all(0 <= t <= MAX_KEY_TIME for t in v),
-                                          f"must be between 0 and {MAX_KEY_TIME:g} s",
-                                          f"each in [0, {MAX_KEY_TIME:g}]"))
+                                     KEY_TIMES)
     offsets: tuple[Vec3, ...] = param((), "The shift s at each key time (m); empty: none.",
                                       Rule(lambda v: all(abs(c) <= MAX_OFFSET for p in v
                                                          for c in p),
@@ -93,10 +89,7 @@ class Motion(Record):
             if given not in (0, len(self.times)):
                 raise SceneError(f"must have one value per key time ({len(self.times)}), or "
                                  f"none (got {given})", (name,))
-        for index, (early, late) in enumerate(zip(self.times, self.times[1:])):
-            if late - early < MIN_KEY_GAP:
-                raise SceneError(f"must increase by at least {MIN_KEY_GAP:g} s from key to "
-                                 f"key (got {early!r} then {late!r})", ("times", index + 1))
+        check_key_times(self.times)
         for name in ("spin", "amplitude"):
             if any(getattr(self, name)):
                 raise SceneError("a keyframed motion has no constant spin or oscillation: "

@@ -12,8 +12,9 @@ import pytest
 
 from physics.box_contacts import (ABSOLUTE_TOLERANCE, EDGE_FEATURE_BASE, RELATIVE_TOLERANCE,
                                   box_box_contacts, box_corners, box_edges, candidate_axes,
-                                  choose_axis, closest_points_on_segments, separations)
+                                  choose_axis, separations)
 from physics.quaternions import rotation_matrices
+from physics.solids import segments_closest
 from scene_model.geometry import rotation_matrix
 
 TOL = 1e-9
@@ -195,8 +196,9 @@ def test_b_face_or_edge_axis_is_chosen_only_beyond_the_margin_for_either_sign(s_
     ((-2, -3, 0), (-2, -1, 0), (0, 0, 0), (-2, -1, 0)),           # both clamped
 ])
 def test_closest_points_of_segments_match_the_analytic_points_within_1e_9(p2, q2, on_1, on_2):
-    found = closest_points_on_segments(np.zeros(3), np.array([1.0, 0, 0]), np.array(p2, float),
-                                       np.array(q2, float))
+    p1, q1, p2, q2 = (np.array([v], float) for v in ((0, 0, 0), (1, 0, 0), p2, q2))
+    s, t = segments_closest(p1, q1, p2, q2)
+    found = (p1 + s[:, None] * (q1 - p1))[0], (p2 + t[:, None] * (q2 - p2))[0]
     assert np.abs(found[0] - on_1).max() <= TOL and np.abs(found[1] - on_2).max() <= TOL
 
 
