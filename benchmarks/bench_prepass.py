@@ -58,8 +58,14 @@ def steps_row(name, scene, width, height) -> str:
 def times(scene, width, height, backend, precision, repeat):
     """Median seconds per frame without and with the pre-pass, alternating."""
     variants = [scene, with_settings(scene, prepass="cone")]
-    seconds = [[], []]
-    for variant in variants:                      # warm-up: compile both programs
+    return alternating_times(variants, width, height, backend, precision, repeat)
+
+
+def alternating_times(variants, width, height, backend, precision, repeat):
+    """Median seconds per frame of each scene of ``variants``, rendered in turn ``repeat``
+    times after one warm-up frame each (which compiles their programs)."""
+    seconds = [[] for _ in variants]
+    for variant in variants:
         marchlab.render(variant, width, height, backend=backend, precision=precision)
     for _ in range(repeat):
         for i, variant in enumerate(variants):
@@ -67,6 +73,19 @@ def times(scene, width, height, backend, precision, repeat):
             marchlab.render(variant, width, height, backend=backend, precision=precision)
             seconds[i].append(time.perf_counter() - start)
     return [statistics.median(s) for s in seconds]
+
+
+def timing_rows(variants, width, height, timed, labels, repeat) -> list[str]:
+    """A Markdown row per backend label of ``labels`` ("gpu", "numpy float32", ...; ``timed``
+    gives each its precision): the median ms per frame of each of ``variants``
+    (`alternating_times`) and its ratio to the first's."""
+    rows = []
+    for label in labels:
+        median = alternating_times(variants, width, height, label.split()[0], timed[label],
+                                   repeat)
+        rows.append(f"| {label} | " + " | ".join(f"{1000 * t:.1f} ({t / median[0]:.2f}x)"
+                                                 for t in median) + " |")
+    return rows
 
 
 def main() -> None:

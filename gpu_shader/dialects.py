@@ -30,6 +30,20 @@ STRUCTS = {
 }
 # With path labels, a pixel also carries its label (24 bits, exact in a float).
 PATH_FIELD = ("real", "path")
+# A ray of the glass tree (glsl/pipeline/trace_glass.glsl), declared where a scene has glass;
+# with path labels it carries its branch's label.
+RAY_STRUCT = (("vec3", "origin"), ("vec3", "direction"), ("vec3", "weight"),
+              ("vec3", "absorption"), ("int", "depth"))
+RAY_LABEL = ("real", "label")
+
+
+def program_structs(path_labels: bool, glass: bool = False) -> dict:
+    """The structs of a program: `STRUCTS`, a ``path`` field in Pixel with ``path_labels``,
+    and the glass tree's Ray with ``glass``."""
+    structs = dict(STRUCTS, Pixel=STRUCTS["Pixel"] + (PATH_FIELD,) * path_labels)
+    if glass:
+        structs["Ray"] = RAY_STRUCT + (RAY_LABEL,) * path_labels
+    return structs
 
 
 @dataclass(frozen=True)
@@ -50,6 +64,9 @@ class Dialect:
     # The vertex shader that goes with the program (GLSL), given the same three numbers as
     # declare_parameters; "" for the plain full-screen triangle or no vertex stage.
     vertex_shader: Callable[[int, int, int], str] = lambda rows, fixed, flat_rows: ""
+    # How the program reads its texture atlas (glsl/texture.glsl), given the number of
+    # parameter rows and the atlas's width: TEXEL(column, row) and what it reads from.
+    texels: Callable[[int, int], str] = lambda first, width: ""
 
     def library(self, name: str):
         """The building blocks ``glsl/<name>.glsl`` (a packet program derives its own from
@@ -60,9 +77,9 @@ class Dialect:
         """A number literal that reads back as exactly ``value`` rounded to `real`."""
         return np.format_float_positional(self.real_dtype.type(value), unique=True, trim="0")
 
-    def structs(self, path_labels: bool = False) -> str:
-        """The struct declarations; with ``path_labels``, a Pixel has a ``path`` field."""
-        structs = dict(STRUCTS, Pixel=STRUCTS["Pixel"] + (PATH_FIELD,) * path_labels)
+    def structs(self, path_labels: bool = False, glass: bool = False) -> str:
+        """The struct declarations (`program_structs`)."""
+        structs = program_structs(path_labels, glass)
         return "\n".join(self.struct(name, fields) for name, fields in structs.items())
 
 
@@ -142,6 +159,15 @@ def glsl_vertex_shader(rows: int, fixed: int, flat_rows: int) -> str:
     return f"{version}\n#define ROWS {rows}\n#define FLAT_ROWS {fixed}\n{rest}"
 
 
+_GLSL_TEXELS = """\
+// The texture atlas (glsl/texture.glsl): an RGBA32F texture, GL row r the atlas's row r,
+// read texel by texel with texelFetch; the program filters it itself, the driver's sampler
+// never does.
+uniform sampler2D texels;
+#define TEXEL(column, row) texelFetch(texels, ivec2(column, row), 0)
+"""
+
+
 GLSL = Dialect(
     name="glsl",
     prelude="""\
@@ -155,11 +181,14 @@ GLSL = Dialect(
 #define real float
 // The depth of a miss, as in the reference; GLSL has no literal for it.
 #define INFINITY uintBitsToFloat(0x7F800000u)
+// C's atan2(y, x) is GLSL's atan(y, x) (GLSL spec 8.1).
+#define atan2(y, x) atan(y, x)
 """,
     struct=_glsl_struct,
     to_int=lambda expr: f"int({expr})",
     declare_parameters=_glsl_parameters,
     vertex_shader=glsl_vertex_shader,
+    texels=lambda first, width: _GLSL_TEXELS,
     real_dtype=np.dtype(np.float32),
     entry="main.frag",
     prepass_entry="prepass.frag",
@@ -297,6 +326,16 @@ def thread_parameters(source: str) -> str:
                           "\n".join(lines))
 
 
+def _opencl_texels(first: int, width: int) -> str:
+    """TEXEL(column, row) of the texture atlas, which OpenCL appends to the parameter
+    buffer: a texel a row of P, after the `first` rows of parameters."""
+    return f"""\
+// The texture atlas (glsl/texture.glsl) follows the {first} rows of parameters in P, one texel
+// a row, {width} texels an atlas row (gpu_shader/opencl.py, parameter_buffer).
+#define TEXEL(column, row) U[{first} + {width} * (row) + (column)]
+"""
+
+
 def _opencl(real: str, dtype, packets: bool = False) -> Dialect:
     """OpenCL C over `real`: one ray per work-item, or one packet of rays (``packets``)."""
     return Dialect(
@@ -305,6 +344,7 @@ def _opencl(real: str, dtype, packets: bool = False) -> Dialect:
         struct=_opencl_packet_struct if packets else _opencl_struct,
         to_int=lambda expr: f"(int)({expr})",
         declare_parameters=lambda rows, fixed, flat_rows: _OPENCL_PARAMETERS,
+        texels=_opencl_texels,
         real_dtype=np.dtype(dtype),
         entry="main_packet.cl" if packets else "main.cl",
         finish=thread_parameters,

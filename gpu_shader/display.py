@@ -155,7 +155,8 @@ class Display:
         aov : str
             One of `OVERLAYS`.
         gamma, max_steps : float, int
-            As in `Frame` (the scene's ``render.gamma`` and ``render.max_steps``).
+            As in `Frame` (the scene's ``render.gamma``, and ``render.max_steps`` times
+            the primary rays a pixel shoots: `scene_model.sampling.pixel_max_steps`).
         depth_range : (near, far)
             The ends of the depth overlay's ramp: `depth_range` of plane 1.
         selected : iterable of int

@@ -7,8 +7,11 @@ The program is assembled in the order a reader meets it:
    written from the tree (`gpu_shader.sdf_code`);
 3. the march and the shadow function the settings ask for, ``estimate_normal`` for the
    chosen stencil;
-4. lights of the kinds present, the shading model, checker, fog and background only if used;
-5. ``trace``, the per-pixel pipeline of `reference_cpu.render`, then the entry point.
+4. lights of the kinds present, the shading model, checker, textures, fog and background only
+   if used;
+5. ``trace``, the per-pixel pipeline of `reference_cpu.render`; with anti-aliasing
+   (``render.samples`` > 1), ``supersample``, which traces each of a pixel's rays; then the
+   entry point.
 
 Building blocks come from the libraries in ``glsl/*.glsl``, function by function
 (`gpu_shader.library`); the pipeline functions (normal, materials, shading over the lights,
@@ -24,6 +27,8 @@ suite needs (`scene_model.frame.Frame.path`); a program for a student has none o
 from __future__ import annotations
 
 import math
+import re
+import typing
 from dataclasses import dataclass
 
 import numpy as np
@@ -31,11 +36,17 @@ import numpy as np
 from reference_cpu.cone_prepass import CONE_SLACK, MIN_PROGRESS, tile_grid
 from reference_cpu.culling import culled_bounds
 from reference_cpu.normals import STENCILS
+from reference_cpu.refraction import LABEL_WEIGHT, MIN_RAY_WEIGHT
 from reference_cpu.relaxation import SLOPE_WEIGHT
 from scene_model.camera import camera_basis
 from scene_model.colormaps import HEAT_COLORS, HEAT_STOPS
+from scene_model.environment import CUBE_KINDS, ENVIRONMENT_KINDS, environment_map, turn
 from scene_model.errors import MarchlabError
-from scene_model.scene import DirectionalLight, PointLight, Scene, SpotLight
+from scene_model.sampling import centre_sample, ray_offsets
+from scene_model.scene import (LIT_SHADING, DirectionalLight, PointLight, Scene, Shading,
+                               SpotLight, shading_modes)
+from scene_model.textures import (MAPPING_CODES, texture_atlas, texture_image, texture_wrap,
+                                  surface_mapping)
 from scene_model.shapes import primitives
 
 from .dialects import MAX_FLAT_ROWS, Dialect, dialect as get_dialect
@@ -44,9 +55,13 @@ from .parameters import ParameterBlock
 from .packets import packet_source
 from .sdf_code import scene_sdf_code
 
-LIT_MODES = ("phong", "blinn_phong", "toon")
+LIT_MODES = LIT_SHADING
 SPECULAR = {"phong": "specular_phong", "blinn_phong": "specular_blinn_phong",
-            "toon": "specular_phong"}
+            "toon": "specular_phong", "stripes": "specular_phong"}
+# How each lit model shapes its diffuse and specular terms (glsl/shading.glsl).
+BANDS = {"toon": "toon_band", "stripes": "stripes_band"}
+# The models a lit render's object may choose, coded in its material row (`shading_modes`).
+MODEL_CODES = {m: i for i, m in enumerate(typing.get_args(Shading))}
 LIGHT_KINDS = {DirectionalLight: "directional", PointLight: "point", SpotLight: "spot"}
 # March hard shadow rays toward two lights in one loop (glsl/shadow_pair.glsl) where a scene
 # allows it; tests turn it off to check that it changes no pixel.
@@ -78,6 +93,11 @@ class Program:
     prepass_source : str
         GLSL: the fragment shader that draws the tile starts into ``cone_starts``, one
         fragment per tile (it shares ``vertex_source``); "" otherwise.
+    texels : (R, W, 4) float32 ndarray or None
+        The texture atlas the program reads with TEXEL (glsl/texture.glsl): an environment
+        map's texels and the textured materials' images (`scene_model.textures.texture_atlas`),
+        RGB and a 0; None where the program reads none. GLSL: the RGBA32F
+        texture ``texels``; OpenCL: R W rows appended to the parameter buffer.
     """
     source: str
     parameters: np.ndarray
@@ -86,6 +106,7 @@ class Program:
     path_labels: bool = False
     prepass_tile: int = 0
     prepass_source: str = ""
+    texels: np.ndarray | None = None
 
     def tiles(self, width: int, height: int) -> tuple[int, int]:
         """(columns, rows) of pre-pass tiles of a width x height image."""
@@ -113,7 +134,8 @@ def generate(scene: Scene, width: int, height: int, dialect: str = "glsl",
         scalar = scalar_program(scene, width, height, precision, path_labels,
                                 pair_shadow_rays=False)
         return Program(packet_source(scalar, language), scalar.parameters, scalar.features,
-                       path_labels=path_labels, prepass_tile=scalar.prepass_tile)
+                       path_labels=path_labels, prepass_tile=scalar.prepass_tile,
+                       texels=scalar.texels)
     return _Generator(scene, language, flat_rows, path_labels).program(width, height)
 
 
@@ -133,6 +155,11 @@ class ScalarProgram:
     parameters : (N, 4) float64 ndarray
     features : tuple of str
     path_labels : bool
+    prepass_tile : int
+        As `Program.prepass_tile`.
+    supersampled : bool
+        Whether the functions end with ``supersample`` (``render.samples`` > 1), which the
+        entry point then calls instead of ``trace``.
     """
     defines: str
     functions: str
@@ -140,6 +167,8 @@ class ScalarProgram:
     features: tuple[str, ...]
     path_labels: bool = False
     prepass_tile: int = 0
+    supersampled: bool = False
+    texels: np.ndarray | None = None
 
 
 def scalar_program(scene: Scene, width: int, height: int, precision: str = "float32",
@@ -153,9 +182,10 @@ def scalar_program(scene: Scene, width: int, height: int, precision: str = "floa
                            pair_shadow_rays=pair_shadow_rays)
     parts, _ = generator.sections(width, height)
     functions = "\n".join(_banner(title) + text for title, text in parts if text)
-    return ScalarProgram(generator.block.defines(), functions,
+    return ScalarProgram(generator.block.defines() + generator.texel_reader(), functions,
                          generator.block.values(np.float64), tuple(sorted(generator.features)),
-                         path_labels, generator.prepass_tile)
+                         path_labels, generator.prepass_tile, generator.supersampled,
+                         generator.texels)
 
 
 class _Generator:
@@ -165,13 +195,32 @@ class _Generator:
         self.flat_rows, self.path_labels = flat_rows, path_labels
         self.block = ParameterBlock()
         self.features: set[str] = set()
+        self.texels: np.ndarray | None = None      # the texture atlas, where one is read
         self.primitives = list(primitives(scene.objects))
         self.materials = [scene.materials[p.material] for p in self.primitives]
         self.checker = any(m.checker is not None for m in self.materials)
+        # Textured objects (glsl/texture.glsl): each primitive's mapping, or None; their
+        # images join the texture atlas (`texture_parts`), their rows the materials'.
+        self.mappings = [surface_mapping(m.texture, p.kind)
+                         if m.texture is not None and self.s.shading in LIT_MODES else None
+                         for p, m in zip(self.primitives, self.materials)]
+        self.textured = any(self.mappings)
+        self.texture_images: list = []        # each primitive's image in the atlas, or None
         self.reflections = (self.s.reflection_depth > 0 and self.s.shading in LIT_MODES
                             and any(m.kr > 0 for m in self.materials))
+        # Glass: the ray tree with refracted rays (glsl/pipeline/trace_glass.glsl).
+        self.glass = (self.s.shading in LIT_MODES
+                      and any(m.transparency > 0 for m in self.materials))
         self.fog = self.s.fog.density > 0 and self.s.shading in LIT_MODES
+        # The objects' shading models: one for all (`model`), or several chosen per object
+        # by a material row (`shade_surface`, glsl/pipeline/shade_surface.glsl).
+        models = shading_modes(scene) or [self.s.shading]
+        self.models = sorted(set(models), key=models.index)
+        self.model = self.models[0]
+        self.mixed = self.s.shading in LIT_MODES and (len(self.models) > 1
+                                                      or self.model not in LIT_MODES)
         self.prepass_tile = self.s.prepass_tile if self.s.prepass == "cone" else 0
+        self.supersampled = self.s.samples > 1
         self.cone_section: tuple[str, str] | None = None      # set by `sections`
         # Hard shadow rays toward two lights are marched together (hard_shadow_pair) with
         # plain sphere tracing (relaxed shadow rays keep the relaxed march of their own):
@@ -196,8 +245,8 @@ class _Generator:
         rows, fixed = max(1, len(self.block.rows)), max(1, fixed)
         head = [self.d.prelude, _banner("parameters: one vec4 row each, set per frame")
                 + self.d.declare_parameters(rows, fixed, self.flat_rows)]
-        head.append(self.block.defines())
-        head.append(self.d.structs(self.path_labels))
+        head.append(self.block.defines() + self.texel_reader())
+        head.append(self.d.structs(self.path_labels, self.glass))
 
         def assemble(sections):
             body = [_banner(title) + text for title, text in sections if text]
@@ -206,13 +255,14 @@ class _Generator:
         return Program(assemble(parts), self.block.values(np.float64),
                        tuple(sorted(self.features)),
                        self.d.vertex_shader(rows, fixed, self.flat_rows), self.path_labels,
-                       self.prepass_tile, assemble(prepass_parts) if prepass_parts else "")
+                       self.prepass_tile, assemble(prepass_parts) if prepass_parts else "",
+                       self.texels)
 
     def entry(self, name: str) -> tuple[str, str]:
         """The section of the entry point ``glsl/<name>``."""
         return (f"the entry point (glsl/{name})",
                 fill_template(name, path_labels=self.path_labels,
-                              prepass=bool(self.prepass_tile)))
+                              prepass=bool(self.prepass_tile), samples=self.supersampled))
 
     def sections(self, width: int, height: int) -> tuple[list[tuple[str, str]], int]:
         """The program's functions as (section title, text) pairs in reading order, all but
@@ -242,13 +292,21 @@ class _Generator:
             parts.append(self.cone_section)
         parts += self.march_parts()
         parts.append(("surface normals (glsl/pipeline/normals.glsl)", self.normal_code()))
+        if self.glass:
+            parts.append((f"glass ({self.file('glass')})", self.d.library("glass").select(
+                ["refract_k", "refract_direction", f"fresnel_{self.s.fresnel}", "beer_lambert"])))
+        parts += self.texture_parts()
         parts += self.shading_parts()
         # Materials are read by object id; their rows come last, outside the private copy.
         fixed = len(self.block.rows)
         if self.s.shading in LIT_MODES:
             parts.insert(-1, ("materials, indexed by object id (glsl/pipeline/materials.glsl)",
                               self.material_code()))
-        parts.append(("the per-pixel pipeline (glsl/pipeline/trace.glsl)", self.pixel_code()))
+        trace = "trace_glass" if self.glass else "trace"
+        parts.append((f"the per-pixel pipeline (glsl/pipeline/{trace}.glsl)", self.pixel_code()))
+        if self.supersampled:
+            parts.append(("anti-aliasing: every ray of a pixel (glsl/pipeline/samples.glsl)",
+                          self.samples_code()))
         return parts, fixed
 
     def file(self, name: str) -> str:
@@ -258,7 +316,7 @@ class _Generator:
     def template(self, name: str, **context) -> str:
         """``glsl/pipeline/<name>.glsl`` filled in for this program."""
         return fill_template(f"pipeline/{name}.glsl", path_labels=self.path_labels,
-                             mode=self.s.shading, **context)
+                             mode=self.s.shading, shade=self.shade_call(), **context)
 
     # --- parameters that every program has --------------------------------------------------
 
@@ -321,7 +379,7 @@ class _Generator:
 
     def shading_parts(self) -> list[tuple[str, str]]:
         mode = self.s.shading
-        self.features.add(f"shading:{mode}")
+        self.features |= {f"shading:{m}" for m in self.models}
         shading_lib = self.d.library("shading")
         background, background_needs = self.background_code()
         path = ["path_step"] * self.path_labels
@@ -333,45 +391,106 @@ class _Generator:
             return [(f"the path label ({self.file('shading')})", shading_lib.select(path)),
                     ("the heat colour map (glsl/pipeline/heat.glsl)", self.heat_code())]
         light_source, light_needs = self.light_code()
+        lit = [m for m in self.models if m in LIT_MODES]
         # Without lights a lit surface shows its ambient term only: no diffuse or specular.
-        wanted = ["diffuse", SPECULAR[mode]] * bool(self.scene.lights) + background_needs + path
-        wanted += ["toon_band"] * (mode == "toon" and bool(self.scene.lights))
+        wanted = background_needs + path
+        if self.scene.lights and lit:
+            wanted += ["diffuse"] + [SPECULAR[m] for m in lit] + [BANDS[m] for m in lit
+                                                                 if m in BANDS]
+        wanted += [f"shade_{m}" for m in self.models if m in ("normals", "depth")]
         wanted += ["checker"] * self.checker
         wanted += ["apply_fog"] * self.fog
         pairs = ([(f"shadow rays toward two lights at once ({self.file('shadow_pair')})",
                    self.d.library("shadow_pair").select(["hard_shadow_pair"]))]
                  if self.paired_lights else [])
+        heat = ([("the heat colour map (glsl/pipeline/heat.glsl)", self.heat_code())]
+                if "steps" in self.models else [])
         return [
             (f"lights ({self.file('lights')})", self.d.library("lights").select(light_needs)),
             (f"shading ({self.file('shading')})", shading_lib.select(wanted)),
             ("the background (glsl/pipeline/background.glsl)", background),
-        ] + pairs + [(f"the {mode} model over the scene's lights (glsl/pipeline/shade.glsl)",
-                      light_source)]
+        ] + heat + pairs + [(f"the {', '.join(lit)} model{'s' * (len(lit) > 1)} over the "
+                             "scene's lights (glsl/pipeline/shade.glsl)", light_source)]
 
     def material_code(self) -> str:
         """Append each object's material rows (after every fixed row); return
         ``MATERIAL(id, row)``, which reads them by object id, and ``surface_albedo``."""
-        stride = 4 if self.checker else 2
+        stride = 2 + 2 * self.checker + 2 * self.glass + self.mixed + 3 * self.textured
         first = len(self.block.rows)
-        for m in self.materials:
+        for k, (m, model) in enumerate(zip(self.materials, shading_modes(self.scene))):
             self.block.row([*m.color, m.ka])
             self.block.row([m.kd, m.ks, m.shininess, m.kr])
             if self.checker:
                 c = m.checker
                 self.block.row([*c.color_a, c.scale] if c else [0, 0, 0, 1])
                 self.block.row([*c.color_b, 1.0] if c else [0, 0, 0, 0])
+            if self.glass:
+                self.block.row([*m.absorption, m.transparency])
+                self.block.row([m.ior, 0, 0, 0])
+            if self.mixed:
+                self.block.row([MODEL_CODES[model], 0, 0, 0])
+            if self.textured:
+                mapping, t = self.mappings[k], m.texture
+                self.block.row(self.texture_images[k] or [0, 1, 1, 0])
+                self.block.row([*t.tint, t.scale] if mapping else [0, 0, 0, 1])
+                self.block.row([MAPPING_CODES[mapping], t.sharpness, 0, 0] if mapping
+                               else [0, 1, 0, 0])
         if self.checker:
             self.features.add("checker")
-        return self.template("materials", first=first, stride=stride, checker=self.checker)
+        used = {name: MAPPING_CODES[name] for name in MAPPING_CODES if name in self.mappings}
+        return self.template("materials", first=first, stride=stride, checker=self.checker,
+                             glass_row=self.glass_row if self.glass else None,
+                             model_row=self.model_row if self.mixed else None,
+                             texture_row=self.texture_row if self.textured else None,
+                             mappings=used)
+
+    @property
+    def glass_row(self) -> int:
+        """The first of a material's two glass rows: (absorption, transparency), (ior)."""
+        return 4 if self.checker else 2
+
+    @property
+    def model_row(self) -> int:
+        """The material row whose x codes the object's shading model (`MODEL_CODES`)."""
+        return self.glass_row + 2 * self.glass
+
+    @property
+    def texture_row(self) -> int:
+        """The first of a material's three texture rows: the image in the atlas (first row,
+        width, height, wrap), (tint, scale), (mapping code, sharpness, 0, 0)."""
+        return self.model_row + self.mixed
+
+    def pattern_features(self) -> str:
+        """What the shading adds to the path label's features for the surface's pattern:
+        the checker cell's parity, and the face of a cube-mapped texture (the colour may
+        jump where either changes), or 0."""
+        terms = (["surface_checker_parity(p, id)"] * self.checker
+                 + ["surface_texture_face(n, id)"] * ("cube" in self.mappings))
+        return " + ".join(terms) or "0.0"
 
     def light_code(self) -> tuple[str, list[str]]:
         """The shading function over the scene's lights (and the shadow functions it calls),
         and the light functions it needs."""
-        lights = [{"index": i, "kind": self.light_rows(i, light)}
-                  for i, light in enumerate(self.scene.lights)]
-        source = self.template("shade", lights=lights, shadows=self.s.shadows,
-                               paired=self.paired_lights, checker=self.checker)
+        lights = [{"index": i, "kind": self.light_rows(i, light),
+                   "own": light.separate_colors()} for i, light in enumerate(self.scene.lights)]
+        lit = [m for m in self.models if m in LIT_MODES]
+        # One shade_<model> per lit model, the shadow helpers with the first.
+        source = "\n".join(
+            self.template("shade", lights=lights, shadows=self.s.shadows, helpers=i == 0,
+                          paired=self.paired_lights, features=self.pattern_features(),
+                          model=m)
+            for i, m in enumerate(lit))
+        if self.mixed:
+            codes = [{"name": m, "code": MODEL_CODES[m]} for m in self.models]
+            source += "\n" + self.template("shade_surface", models=codes, row=self.model_row)
         return source, sorted({f"light_{light['kind']}" for light in lights})
+
+    def shade_call(self) -> str:
+        """How the pipeline shades a hit p, normal n, seen along d, of object id with march
+        result h: the one model's shade function, or shade_surface's choice."""
+        if self.mixed:
+            return "shade_surface(p, n, -d, id, h)"
+        return f"shade_{self.model}(p, n, -d, id)"
 
     def light_rows(self, i: int, light) -> str:
         """Put light ``i``'s numbers in the parameter block (``LIGHTi_POSITION``, ...), as the
@@ -384,6 +503,11 @@ class _Generator:
         b = self.block
         radiance = np.multiply(light.color, light.intensity)
         L = f"LIGHT{i}_"
+        if light.separate_colors():
+            # RADIANCE is the diffuse colour; the specular and ambient ones have rows too.
+            ambient, radiance, specular = light.term_colors()
+            b.named({L + "SPECULAR": ("xyz", specular)})
+            b.named({L + "AMBIENT": ("xyz", ambient)})
         if kind == "directional":
             direction = np.asarray(light.direction, dtype=np.float64)
             b.named({L + "TO_LIGHT": ("xyz", -direction / np.linalg.norm(direction))})
@@ -401,15 +525,67 @@ class _Generator:
         return kind
 
     def background_code(self) -> tuple[str, list[str]]:
-        """``background(direction)`` and the library function it calls."""
+        """``background(direction)`` and the shading library function it calls (an
+        environment's functions are `texture_parts`)."""
         kind = self.s.background.kind
         self.features.add(f"background:{kind}")
+        if kind in ENVIRONMENT_KINDS:
+            sampler = "cubemap" if kind in CUBE_KINDS else "equirect"
+            return self.template("background", kind=kind, sampler=sampler), []
         if kind == "solid":
             self.block.named({"BACKGROUND_COLOR": ("xyz", self.s.background.color)})
         else:
             self.block.named({"BACKGROUND_BOTTOM": ("xyz", self.s.background.bottom)})
             self.block.named({"BACKGROUND_TOP": ("xyz", self.s.background.top)})
         return self.template("background", kind=kind), [f"background_{kind}"]
+
+    def texture_parts(self) -> list[tuple[str, str]]:
+        """The program's textures: an environment background's (where the shading mode shows
+        the background) and the textured objects' images in one atlas, their numbers in the
+        block, and the texture and environment functions that ``background`` and
+        ``surface_albedo`` call."""
+        bg = self.s.background
+        environment = (environment_map(bg) if bg.kind in ENVIRONMENT_KINDS
+                       and self.s.shading != "steps" else None)
+        if environment is None and not self.textured:
+            return []
+        self.features.add("texture_bilinear")
+        parts, needs = [], ["texture_bilinear"]
+        if environment is not None:
+            self.block.named({"ENVIRONMENT_TEXTURE": ("xyzw", environment.texture)})
+            self.block.named({"ENVIRONMENT_LOOK": ("xyz", (bg.intensity, *turn(bg.rotation)))})
+            sampler = "background_cubemap" if environment.cube else "background_equirect"
+            source = self.d.library("environment").select([sampler])
+            texture = self.d.library("texture")
+            # The texture functions the environment's call (the cube face rule, equirect_uv).
+            needs += [f for f in texture.names() if re.search(rf"\b{f}\s*\(", source)]
+            parts.append((f"environment maps ({self.file('environment')})", source))
+        self.texels = environment.rgba if environment is not None else None
+        if self.textured:
+            images = [texture_image(m.texture) if mapping else None
+                      for m, mapping in zip(self.materials, self.mappings)]
+            distinct = list(dict.fromkeys(i for i in images if i is not None))
+            first = (environment,) if environment is not None else ()
+            atlas = texture_atlas(first + tuple(distinct))
+            self.texels = atlas.rgba
+            start = len(first)
+            self.texture_images = [
+                None if image is None else atlas.image(start + distinct.index(image),
+                                                       texture_wrap(mapping))
+                for image, mapping in zip(images, self.mappings)]
+            used = [m for m in MAPPING_CODES if m in self.mappings]
+            self.features |= {f"texture:{m}" for m in used}
+            needs += [f"texture_{m}" for m in used]    # (surface_texture_face: major_face)
+        title = "bilinear texture filtering" + " and surface mappings" * self.textured
+        return [(f"{title} ({self.file('texture')})",
+                 self.d.library("texture").select(needs))] + parts
+
+    def texel_reader(self) -> str:
+        """How the program reads its texture atlas (``TEXEL``), after every parameter row:
+        "" where it reads none."""
+        if self.texels is None:
+            return ""
+        return "\n" + self.d.texels(len(self.block.rows), self.texels.shape[1])
 
     def heat_code(self) -> str:
         """``heat``, linear between the stops of `scene_model.colormaps`."""
@@ -426,11 +602,32 @@ class _Generator:
     def pixel_code(self) -> str:
         """``trace``, the whole pixel: with mirrors, a reflection loop that marches the camera
         ray as its first bounce; without, one march and ``pixel_color``."""
+        weight = f"#define MIN_RAY_WEIGHT {self.d.literal(MIN_RAY_WEIGHT)}\n"
+        if self.path_labels:
+            weight += f"#define LABEL_WEIGHT {self.d.literal(LABEL_WEIGHT)}\n"
+        if self.glass:
+            # The tree holds at most 2^(depth + 1) - 1 rays.
+            self.features.add("glass")
+            self.features.add(f"fresnel:{self.s.fresnel}")
+            depth = self.s.reflection_depth
+            return (weight + f"#define TREE_RAYS {2 ** (depth + 1) - 1}\n\n"
+                    + self.template("trace_glass", fog=self.fog, depth=depth,
+                                    glass_row=self.glass_row, fresnel=self.s.fresnel))
         if self.s.shading in LIT_MODES and self.reflections:
             self.features.add("reflections")
-            return self.template("trace", reflections=True, fog=self.fog)
+            return weight + "\n" + self.template("trace", reflections=True, fog=self.fog)
         return (self.template("pixel", fog=self.fog) + "\n"
                 + self.template("trace", reflections=False))
+
+    def samples_code(self) -> str:
+        """``supersample``: a pixel's n x n samples (and for even n its centre) traced and
+        folded, at the offsets of `scene_model.sampling.ray_offsets`, written as literals."""
+        n, pattern = self.s.samples, self.s.sample_pattern
+        self.features.add(f"samples:{pattern}")
+        offsets = [(self.d.literal(dx), self.d.literal(dy)) for dx, dy in ray_offsets(n, pattern)]
+        return self.template("samples", n=n, pattern=pattern, offsets=offsets,
+                             rays=len(offsets), centre=centre_sample(n),
+                             count=self.d.literal(n * n))
 
 
 def _banner(title: str) -> str:

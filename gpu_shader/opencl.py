@@ -189,7 +189,7 @@ def render(scene: Scene, width: int, height: int, precision: str = "float32",
 
     flags = cl.mem_flags
     parameters = cl.Buffer(dev.context, flags.READ_ONLY | flags.COPY_HOST_PTR,
-                           hostbuf=np.ascontiguousarray(program.parameters, dtype=dtype))
+                           hostbuf=parameter_buffer(program, dtype))
     planes = np.empty((3, height, width, 4), dtype)
     outputs = [cl.Buffer(dev.context, flags.WRITE_ONLY, planes[i].nbytes) for i in range(3)]
     local = PACKET_WORK_GROUP if packets else WORK_GROUP
@@ -222,6 +222,16 @@ def render(scene: Scene, width: int, height: int, precision: str = "float32",
     if not path_labels:
         frame.path = None
     return frame
+
+
+def parameter_buffer(program, dtype) -> np.ndarray:
+    """(N, 4) ``dtype``: what the kernel's P holds: the parameter block, then the texture
+    atlas's texels, a row each (glsl/texture.glsl). In the one buffer, what already passes
+    P on to every function and the packet program's gather() serve the texels too."""
+    rows = [np.asarray(program.parameters, dtype)]
+    if program.texels is not None:
+        rows.append(program.texels.reshape(-1, 4).astype(dtype))
+    return np.ascontiguousarray(np.concatenate(rows))
 
 
 def _kernels(cl, dev: Device, source: str, precision: str) -> dict:

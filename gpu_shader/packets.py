@@ -9,15 +9,15 @@ puts the program together in the order a reader meets it:
 1. the packet prelude (the dialect's, with glsl/packet.cl), the parameters and their names;
 2. the structs with a field per lane, and ``choose`` for each of them;
 3. the vectorised functions, with the one-ray program's comments and section titles;
-4. the entry point glsl/main_packet.cl, which calls the packet ``trace`` with the mask of
-   the lanes inside the image.
+4. the entry point glsl/main_packet.cl, which calls the packet ``trace`` (with
+   anti-aliasing, ``supersample``) with the mask of the lanes inside the image.
 """
 
 from __future__ import annotations
 
 from functools import lru_cache
 
-from .dialects import PATH_FIELD, STRUCTS, Dialect
+from .dialects import Dialect, program_structs
 from .library import fill_template
 from .subset import format_program
 from .subset_reader import parse
@@ -29,6 +29,8 @@ ROOTS = {"trace": (True, True, True), "camera_ray": (True, True)}
 LIVE_ROOTS = {"trace"}
 # With the cone pre-pass, its kernel calls tile_start with a packet of tiles.
 PREPASS_ROOTS = {"tile_start": (True, True)}
+# With anti-aliasing the entry point calls supersample(x, y, start) instead of trace.
+SAMPLES_ROOTS = {"supersample": (True, True, True)}
 # A struct field of these types is picked lane by lane with `?:`; others with choose().
 _NATIVE = {"real", "int", "uint", "bool"}
 
@@ -51,16 +53,21 @@ def packet_source(scalar, language: Dialect) -> str:
     # The text depends only on the scene's structure, and a frame asks for it again: keep
     # it, as gpu_shader.opencl keeps the programs built from it.
     return _packet_source(scalar.defines, scalar.functions, scalar.path_labels,
-                          max(1, len(scalar.parameters)), language, bool(scalar.prepass_tile))
+                          max(1, len(scalar.parameters)) + _texel_rows(scalar), language,
+                          bool(scalar.prepass_tile),
+                          "glass" in scalar.features, scalar.supersampled)
 
 
 @lru_cache(maxsize=32)
 def _packet_source(defines: str, functions: str, path_labels: bool, rows: int,
-                   language: Dialect, prepass: bool = False) -> str:
-    structs = program_structs(path_labels)
+                   language: Dialect, prepass: bool = False, glass: bool = False,
+                   supersampled: bool = False) -> str:
+    structs = program_structs(path_labels, glass)
     program = parse(defines + "\n" + functions, structs)
-    packet, _ = vectorise(program, structs, dict(ROOTS, **PREPASS_ROOTS) if prepass else ROOTS,
-                          LIVE_ROOTS)
+    roots = dict(ROOTS, **(PREPASS_ROOTS if prepass else {}),
+                 **(SAMPLES_ROOTS if supersampled else {}))
+    packet, _ = vectorise(program, structs, roots,
+                          LIVE_ROOTS | (set(SAMPLES_ROOTS) if supersampled else set()))
     parts = [
         language.prelude,
         _banner("parameters: one vec4 row each, set per frame")
@@ -68,18 +75,20 @@ def _packet_source(defines: str, functions: str, path_labels: bool, rows: int,
         + "// How many rows P has: a lane's gather() never reads past them (glsl/packet.cl).\n"
         + f"#define PARAMETER_ROWS {rows}\n",
         _banner("structs: one value per lane in every field") + language.structs(
-            path_labels) + "\n" + choose_functions(structs),
+            path_labels, glass) + "\n" + choose_functions(structs),
         _banner("the one-ray program, vectorised (gpu_shader/vectorise.py)")
         + format_program(packet),
         _banner("the entry point (glsl/main_packet.cl)")
-        + fill_template("main_packet.cl", path_labels=path_labels, prepass=prepass),
+        + fill_template("main_packet.cl", path_labels=path_labels, prepass=prepass,
+                        samples=supersampled),
     ]
     return language.finish("\n".join(parts))
 
 
-def program_structs(path_labels: bool) -> dict:
-    """The structs of a program, as `gpu_shader.dialects.Dialect.structs` declares them."""
-    return dict(STRUCTS, Pixel=STRUCTS["Pixel"] + (PATH_FIELD,) * path_labels)
+def _texel_rows(scalar) -> int:
+    """The rows of P after the parameters: the texture atlas's texels, which a lane's
+    gather() may read too."""
+    return 0 if scalar.texels is None else scalar.texels.shape[0] * scalar.texels.shape[1]
 
 
 def choose_functions(structs: dict) -> str:

@@ -8,6 +8,10 @@ of 4-vectors (``glsl/main.frag``, ``glsl/main.cl``):
     1  unit normal x, y, z; depth t (inf on a miss)
     2  SDF evaluations; object id (-1 on a miss); path label (24 bits); 0
 
+With anti-aliasing (``render.samples`` > 1) the colour is the mean of the pixel's samples, the
+evaluations the sum over all its rays, and the rest the ray through its centre's
+(glsl/pipeline/samples.glsl).
+
 Each plane is (H, W, 4), row 0 at the top of the image. Planes 0 and 1 are float; plane 2 is
 int32 where the program can write integers (GLSL, an RGBA32I target) and float in OpenCL,
 where all three share one buffer type. The program writes every value in its final form, so
@@ -19,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from scene_model.frame import Frame
+from scene_model.sampling import pixel_max_steps
 from scene_model.scene import Scene
 
 BANDS = 8              # with a progress callback, a program runs in this many bands of rows
@@ -35,7 +40,8 @@ def frame_from_planes(planes, scene: Scene, backend: str, precision: str) -> Fra
                  steps=steps_id[..., 0].astype(np.int32, copy=False),
                  object_id=steps_id[..., 1].astype(np.int32, copy=False),
                  hit=color_hit[..., 3] > 0.5, gamma=scene.render.gamma,
-                 max_steps=scene.render.max_steps, dither=scene.render.dither,
+                 max_steps=pixel_max_steps(scene.render.max_steps, scene.render.samples),
+                 dither=scene.render.dither,
                  path=labels.view(np.uint32) if labels.dtype == np.int32 else labels.astype(np.uint32),
                  backend=backend, precision=precision)
 

@@ -29,6 +29,8 @@ from .planes import frame_from_planes, row_bands
 
 PROGRAM_CACHE_SIZE = 32
 TARGET_CACHE_SIZE = 8       # sizes kept (a live view draws at a few reduced ones)
+ATLAS_CACHE_SIZE = 4        # texture atlases kept (environments recently drawn)
+ATLAS_UNIT = 1              # the texture unit of the atlas (the cone pre-pass's starts use 0)
 
 
 class ShaderCompileError(MarchlabError):
@@ -77,6 +79,7 @@ class Renderer:
         self.programs: OrderedDict[tuple[str, str], tuple] = OrderedDict()
         self.targets: OrderedDict[tuple[int, int], object] = OrderedDict()
         self.start_targets: OrderedDict[tuple[int, int], object] = OrderedDict()
+        self.atlases: OrderedDict[int, tuple] = OrderedDict()    # id(texels): (texels, texture)
         self.max_block = int(ctx.info["GL_MAX_UNIFORM_BLOCK_SIZE"])
         self.flat_rows = min(MAX_FLAT_ROWS, int(ctx.info.get("GL_MAX_VARYING_VECTORS", 0)))
 
@@ -119,6 +122,10 @@ class Renderer:
                 starts = self._draw_starts(generated, width, height)
                 starts.color_attachments[0].use(location=0)
                 program["cone_starts"].value = 0
+            sampler = program.get("texels", None)
+            if generated.texels is not None and sampler is not None:
+                self.atlas(generated.texels).use(location=ATLAS_UNIT)
+                sampler.value = ATLAS_UNIT
             fbo.use()
             fbo.viewport = (0, 0, width, height)
             self.draw(vao, width, height, progress)
@@ -138,6 +145,30 @@ class Renderer:
         starts.viewport = (0, 0, columns, rows)
         vao.render(vertices=3)
         return starts
+
+    def atlas(self, texels: np.ndarray):
+        """The RGBA32F texture holding a program's texture atlas (R, W, 4), uploaded once and
+        kept while the same array is drawn again (an environment's texels are read once,
+        `scene_model.environment.environment_map`, and shared by every frame)."""
+        key = id(texels)
+        if key in self.atlases:
+            self.atlases.move_to_end(key)
+            return self.atlases[key][1]
+        rows, width, _ = texels.shape
+        largest = int(self.ctx.info["GL_MAX_TEXTURE_SIZE"])
+        if max(rows, width) > largest:
+            raise MarchlabError(f"the scene's images need a texture of {width} x {rows} "
+                                f"texels; this OpenGL allows {largest} a side (use smaller "
+                                "images, or --backend opencl)")
+        texture = self.ctx.texture((width, rows), 4, np.ascontiguousarray(texels).tobytes(),
+                                   dtype="f4")
+        # texelFetch reads texels exactly, whatever the filter; nearest says so to a reader.
+        texture.filter = (self.ctx.NEAREST, self.ctx.NEAREST)
+        self.atlases[key] = (texels, texture)       # the array is kept, so its id is not reused
+        if len(self.atlases) > ATLAS_CACHE_SIZE:
+            _, (_, old) = self.atlases.popitem(last=False)
+            old.release()
+        return texture
 
     def read_frame(self, fbo, scene: Scene, width: int, height: int) -> Frame:
         """The `Frame` held by the planes of ``fbo`` (a `target` that ``scene`` was drawn

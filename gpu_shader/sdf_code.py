@@ -15,21 +15,23 @@ import numpy as np
 from scene_model.errors import MarchlabError
 from scene_model.geometry import rotation_matrix
 from scene_model.shapes import (Box, CappedCylinder, Capsule, Cone, Disk, HexPrism, Intersection,
-                                Node, Plane, Pyramid, Repeat, Rotate, RoundBox, Scale,
+                                Morph, Node, Plane, Pyramid, Repeat, Rotate, RoundBox, Scale,
                                 SmoothIntersection, SmoothSubtraction, SmoothUnion, Sphere,
                                 Subtraction, Torus, Translate, Union, scene_union)
 
 from .parameters import ParameterBlock
 
-# Binary operators: (library function, whether it takes k, condition keeping the first id),
-# as `reference_cpu.scene_sdf._COMBINE`.
+# Binary operators: (library function, the field of its number (k, t) or None, condition
+# keeping the first id, where {n} is that number), as `reference_cpu.scene_sdf._COMBINE`
+# and, for the morph, `reference_cpu.scene_sdf._morph`.
 OPERATORS = {
-    Union: ("op_union", False, "{a} <= {b}"),
-    Intersection: ("op_intersection", False, "{a} >= {b}"),
-    Subtraction: ("op_subtraction", False, "{a} >= -{b}"),
-    SmoothUnion: ("op_smooth_union", True, "{a} <= {b}"),
-    SmoothIntersection: ("op_smooth_intersection", True, "{a} >= {b}"),
-    SmoothSubtraction: ("op_smooth_subtraction", True, "{a} >= -{b}"),
+    Union: ("op_union", None, "{a} <= {b}"),
+    Intersection: ("op_intersection", None, "{a} >= {b}"),
+    Subtraction: ("op_subtraction", None, "{a} >= -{b}"),
+    SmoothUnion: ("op_smooth_union", "k", "{a} <= {b}"),
+    SmoothIntersection: ("op_smooth_intersection", "k", "{a} >= {b}"),
+    SmoothSubtraction: ("op_smooth_subtraction", "k", "{a} >= -{b}"),
+    Morph: ("op_morph", "t", "{n} <= 0.5"),
 }
 
 PRIMITIVES = {Sphere: "sdf_sphere", Box: "sdf_box", RoundBox: "sdf_round_box",
@@ -166,9 +168,9 @@ class SdfWriter:
 
     def combine(self, node: Node, p: str) -> tuple[str, str]:
         """Fold the children left to right, as the reference does."""
-        function, takes_k, keeps_first = OPERATORS[type(node)]
-        first = self.allocate([[node.k]] if takes_k else [])
-        k = [f"P[{first}].x"] if takes_k else []
+        function, number, keeps_first = OPERATORS[type(node)]
+        first = self.allocate([[getattr(node, number)]] if number else [])
+        value = [f"P[{first}].x"] if number else []        # k or t, from the parameter block
         d, ids = self.node(node.children[0], p)
         result, result_id = self.name("d"), self.name("id")
         self.lines.append(f"real {result} = {d};")
@@ -177,10 +179,10 @@ class SdfWriter:
         for child in node.children[1:]:
             d2, ids2 = self.node(child, p)
             if self.with_ids:
-                condition = keeps_first.format(a=result, b=d2)
+                condition = keeps_first.format(a=result, b=d2, n=(value or [""])[0])
                 self.lines.append(f"{result_id} = {condition} ? {result_id} : {ids2};")
             self.used.add(function)
-            args = ", ".join([result, d2] + k)
+            args = ", ".join([result, d2] + value)
             self.lines.append(f"{result} = {function}({args});"
                               + ("  // " + node.kind if not self.with_ids else ""))
         return result, result_id

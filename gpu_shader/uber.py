@@ -29,6 +29,7 @@ import numpy as np
 
 from reference_cpu.culling import MAX_CULLED, culled_bounds
 from reference_cpu.normals import STENCILS
+from reference_cpu.refraction import LABEL_WEIGHT, MIN_RAY_WEIGHT
 from scene_model.camera import camera_basis
 from scene_model.colormaps import HEAT_COLORS, HEAT_STOPS
 from scene_model.errors import MarchlabError
@@ -155,6 +156,25 @@ def _header(scene: Scene, width: int, height: int) -> ParameterBlock:
     if s.prepass != "none":
         raise MarchlabError(f"the uber shader marches every ray from the eye (prepass = "
                             f"{s.prepass!r}); render with backend gpu")
+    if s.background.kind not in BACKGROUNDS:
+        raise MarchlabError(f"the uber shader draws a solid or sky background only (background "
+                            f"type = {s.background.kind!r}); render with backend gpu")
+    if s.shading not in SHADING or any(m.shading for m in scene.materials.values()):
+        raise MarchlabError(f"the uber shader shades every object by one of "
+                            f"{', '.join(SHADING)} (the scene asks for {s.shading!r}, or a "
+                            "material for its own); render with backend gpu")
+    if any(light.separate_colors() for light in scene.lights):
+        raise MarchlabError("the uber shader takes lights of one colour (a light gives its own "
+                            "ambient, diffuse or specular colour); render with backend gpu")
+    if any(m.transparency > 0 for m in scene.materials.values()):
+        raise MarchlabError("the uber shader draws opaque materials only (a material has "
+                            "transparency > 0); render with backend gpu")
+    if any(m.texture is not None for m in scene.materials.values()):
+        raise MarchlabError("the uber shader draws plain and checkered materials only (a "
+                            "material has a texture); render with backend gpu")
+    if s.samples != 1:
+        raise MarchlabError(f"the uber shader traces one ray a pixel (samples = {s.samples}); "
+                            "render with backend gpu")
     for what, count, most in (("objects", len(scene.objects), MAX_OBJECTS),
                               ("lights", len(scene.lights), MAX_LIGHTS)):
         if count > most:
@@ -257,8 +277,10 @@ def _source(block: ParameterBlock) -> str:
                "checker_parity", "path_step", "shade_normals", "shade_depth", "apply_fog",
                "background_solid", "background_sky"]
     uber = load_library("uber")
+    weights = {"MIN_RAY_WEIGHT": glsl.literal(MIN_RAY_WEIGHT),
+               "LABEL_WEIGHT": glsl.literal(LABEL_WEIGHT)}
     layout = "".join(f"#define {name} {value}\n" for name, value in
-                     {**CODES, **LAYOUT}.items()) + "\n" + ACCESSORS
+                     {**CODES, **LAYOUT, **weights}.items()) + "\n" + ACCESSORS
     parts = [
         ("the SDF building blocks (glsl/sdf.glsl)", load_library("sdf").select(sdf_needs)),
         ("bounding spheres (glsl/culling.glsl)",
@@ -276,7 +298,8 @@ def _source(block: ParameterBlock) -> str:
         ("the pixel, from its camera ray (glsl/pipeline/trace.glsl)",
          fill_template("pipeline/trace.glsl", reflections=False, path_labels=True, mode="")),
         ("the entry point (glsl/main.frag)", fill_template(glsl.entry, path_labels=True,
-                                                                    prepass=False)),
+                                                                    prepass=False,
+                                                                    samples=False)),
     ]
     head = [glsl.prelude,
             _banner(f"parameters: {ROWS} rows whatever the scene; the first {HEADER_ROWS} (camera, "

@@ -9,7 +9,8 @@ from scene_model.camera import camera_rays
 from scene_model.errors import MarchlabError, SceneError
 from scene_model.frame import Frame
 from scene_model.scene import (Camera, Checker, DirectionalLight, Fog, Material, PointLight,
-                               RenderSettings, Scene, SkyBackground, SolidBackground, SpotLight)
+                               RenderSettings, Scene, SkyBackground, SolidBackground, SpotLight,
+                               Texture)
 from scene_model.scenefile import bundled_scene_names, load_scene, save_scene
 
 from .probe import probe
@@ -18,6 +19,6 @@ from .render import BACKENDS, render
 __version__ = "0.1.0"
 
 __all__ = ["camera_rays", "render", "probe", "load_scene", "save_scene", "bundled_scene_names", "Frame",
-           "Scene", "Camera", "RenderSettings", "Material", "Checker", "PointLight",
+           "Scene", "Camera", "RenderSettings", "Material", "Checker", "Texture", "PointLight",
            "DirectionalLight", "SpotLight", "Fog", "SkyBackground", "SolidBackground",
            "BACKENDS", "MarchlabError", "SceneError"]

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 from scene_model.camera import MAX_IMAGE_BYTES, image_size_problem
 from scene_model.errors import MarchlabError
+from scene_model.sampling import rays_per_pixel as primary_rays
 from scene_model.scene import Scene
 
 MAX_RAY_STEPS = 50_000_000_000          # classroom at 640x480 is 4.7e8, at 3840x2160 1.3e10
@@ -49,11 +50,13 @@ class BudgetError(MarchlabError):
 
 
 def rays_per_pixel(scene: Scene) -> int:
-    """The most rays one pixel marches: the primary ray and its mirror bounces, and from
-    each of those a shadow ray toward every light when the scene has shadows."""
+    """The most rays one pixel marches: each of its primary rays (one, or with anti-aliasing
+    `scene_model.sampling.rays_per_pixel`) and their mirror bounces, and from each of those
+    a shadow ray toward every light when the scene has shadows."""
     settings = scene.render
     shadow_rays = len(scene.lights) if settings.shadows != "none" else 0
-    return (1 + settings.reflection_depth) * (1 + shadow_rays)
+    return (primary_rays(settings.samples) * (1 + settings.reflection_depth)
+            * (1 + shadow_rays))
 
 
 def ray_steps(scene: Scene, width: int, height: int, frames: int = 1) -> int:

@@ -46,6 +46,8 @@ def add_animation_parser(sub, name: str, func, text: str) -> None:
                    help="frame size in pixels (default: 320x240)")
     p.add_argument("--backend", choices=list(BACKENDS), default=None,
                    help="renderer (default: gpu if it can run here, else numpy)")
+    p.add_argument("--mark-lights", action="store_true",
+                   help="mark each point and spot light the camera sees with a small dot")
     p.add_argument("--csv", metavar="FILE",
                    help="also write the trajectory: one row per frame and body")
     p.add_argument("--save-state", metavar="FILE",
@@ -60,6 +62,17 @@ def add_animation_parser(sub, name: str, func, text: str) -> None:
                         "bodies[0].restitution=0.9")
     add_allow_large(p)
     p.set_defaults(func=func)
+
+def node_path(text: str) -> tuple[int, ...]:
+    """``"2"`` -> (2,), ``"2.0"`` -> (2, 0): a node of the scene's objects, for --outline."""
+    try:
+        path = tuple(int(part) for part in text.split("."))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an object path such as 2 or 2.0")
+    if any(i < 0 for i in path):
+        raise argparse.ArgumentTypeError(f"{text!r}: object indices start at 0")
+    return path
+
 
 def add_allow_large(parser) -> None:
     """The ``--allow-large`` flag of every command that estimates its work first."""
@@ -150,6 +163,11 @@ def build_parser() -> Parser:
                         "float64 for numpy, float32 for gpu)")
     p.add_argument("--aov", choices=AOVS, default="color",
                    help="buffer written to a PNG (an .npz holds them all)")
+    p.add_argument("--outline", type=node_path, action="append", default=[], metavar="PATH",
+                   help="outline an object as the viewer outlines its selection: its index "
+                        "in [[objects]] (2), or a child's path (2.0); may be repeated")
+    p.add_argument("--mark-lights", action="store_true",
+                   help="mark each point and spot light the camera sees with a small dot")
     p.add_argument("--set", action="extend", nargs="+", default=[], metavar="FIELD=VALUE",
                    help="override scene fields, e.g. --set render.max_steps=64 camera.fov=40")
     add_allow_large(p)

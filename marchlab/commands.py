@@ -22,7 +22,8 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from scene_model.errors import MarchlabError, SceneError
-from scene_model.files import write_together
+from scene_model.files import write_atomically, write_together
+from scene_model.frame import png_bytes
 from scene_model.scene import rendered_scene, scene_at
 from scene_model.scenefile import bundled_scene_names, scene_to_toml
 from scene_model.scenefile import load_scene as read_scene
@@ -62,8 +63,13 @@ def cmd_render(args) -> int:
     if output.suffix.lower() not in OUTPUT_SUFFIXES:
         raise MarchlabError(f"{output}: unsupported output format {output.suffix!r} "
                             "(use .png or .npz)")
+    drawn = [flag for flag, on in (("--mark-lights", args.mark_lights),
+                                    ("--outline", args.outline)) if on]
+    if drawn and output.suffix.lower() != ".png":
+        raise MarchlabError(f"{output}: {drawn[0]} draws on a picture: write a .png")
     check_outputs(files=[output])
     scene = load_scene(args.scene, args.set)
+    selected = outlined_ids(scene, args.outline)
     width, height = args.size
     with about_options(f"--size {width}x{height}"):
         check_render(scene, width, height, allow_large=args.allow_large, lift=COMMAND_LINE)
@@ -74,12 +80,38 @@ def cmd_render(args) -> int:
     seconds = time.perf_counter() - start
     make_folders(output)
     try:
-        frame.save(output, aov=args.aov)
+        if drawn:
+            write_atomically(output, png_bytes(drawn_image(frame, scene, args.aov, selected,
+                                                           args.mark_lights)))
+        else:
+            frame.save(output, aov=args.aov)
     except OSError as err:
         raise MarchlabError(f"{output}: cannot write: {err.strerror}") from None
     print(f"wrote {output} ({width}x{height}, {args.backend} {frame.precision}, "
           f"{seconds:.2f} s)")
     return 0
+
+
+def outlined_ids(scene, paths) -> tuple[int, ...]:
+    """The object ids of the primitives under each node path of ``--outline`` (a path that
+    leads nowhere is a one-line error naming it)."""
+    from scene_model.editing import primitive_ids
+    ids = []
+    for path in paths:
+        try:
+            ids += primitive_ids(scene, path)
+        except SceneError as err:
+            raise MarchlabError(f"--outline {'.'.join(map(str, path))}: {err}") from None
+    return tuple(ids)
+
+
+def drawn_image(frame, scene, aov: str, selected=(), mark: bool = False):
+    """The picture of ``frame``'s ``aov`` as the live view draws it: the ``selected`` ids
+    outlined (`gpu_shader.display.overlay_image`), the lights marked if ``mark``."""
+    from gpu_shader.display import overlay_image
+    from .light_marks import mark_lights
+    image = overlay_image(frame, aov, selected)
+    return mark_lights(image, scene, frame) if mark else image
 
 
 @contextmanager
@@ -263,7 +295,7 @@ def animate_scene(args, need_bodies: bool) -> int:
 
     images = render_frames(scene, trajectory.positions, width, height, backend,
                            allow_large=args.allow_large, times=trajectory.times,
-                           orientations=trajectory.orientations)
+                           orientations=trajectory.orientations, mark=args.mark_lights)
     payloads = {output: (gif_bytes(images, plan.frame_seconds) if kind == ".gif"
                          else mp4_bytes(images, 1 / plan.frame_seconds))}
     if table is not None:
@@ -353,15 +385,18 @@ def cmd_bench_accuracy(args) -> int:
 
 
 def render_frames(scene, positions, width: int, height: int, backend: str,
-                  allow_large: bool = False, times=None, orientations=None) -> list:
+                  allow_large: bool = False, times=None, orientations=None,
+                  mark: bool = False) -> list:
     """One 8-bit RGB image (H, W, 3) per row of ``positions`` (T, N, 3), with a progress bar;
     ``times`` (T,) s place the kinematic objects (`scene_model.scene.scene_at`) and
-    ``orientations`` (T, N, 4) turn the boxes and capsules.
+    ``orientations`` (T, N, 4) turn the boxes and capsules; with ``mark``, the lights the
+    camera sees are marked (`marchlab.light_marks`).
 
     Only numbers change from frame to frame, so the GPU backend compiles its program for the
     first frame and reuses it for the others.
     """
     from scene_model.timeline import scene_at_time
+    from .light_marks import mark_lights
     from .simulation import body_rotations
     images = []
     times = [None] * len(positions) if times is None else times
@@ -374,7 +409,8 @@ def render_frames(scene, positions, width: int, height: int, backend: str,
                 still = scene_at_time(still, times[index])
             frame = render(still, width, height,
                            backend=backend, allow_large=allow_large)
-            images.append(frame.image("color"))
+            image = frame.image("color")
+            images.append(mark_lights(image, still, frame) if mark else image)
             if progress:
                 progress(index + 1, len(positions))
     return images

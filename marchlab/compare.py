@@ -41,7 +41,7 @@ class Comparison:
     hit_differs_far: int         # ... of those, more than 1 pixel from a's silhouette
     object_id_differs: int       # pixels hit in both whose object ids differ
     interior: int                # pixels hit in both, eroded away from silhouettes
-    path_differs: int            # pixels hit in both whose path labels differ
+    path_differs: int            # pixels hit (or missed) in both whose path labels differ
     path_differs_far: int        # ... of those, more than 1 px from a jump in a's path label
     depth_max: float             # max |t_a - t_b| over the interior
     depth_max_relative: float    # max |t_a - t_b| / t_a over the interior
@@ -136,9 +136,11 @@ def compare_frames(a: Frame, b: Frame, erode: int = 2, epsilon: float | None = N
     """Statistics of frame ``b`` against the reference frame ``a`` (same size and scene).
 
     ``epsilon`` is the scene's hit threshold, which scales the depth gate; without it
-    ``depth_excess`` is nan. Where both frames carry path labels, pixels whose labels differ
-    saw a different surface, checker cell or shadow state along their path (a reflected
-    checker edge, a shadow edge): like pixels whose hit flags differ, they are excused from
+    ``depth_excess`` is nan. Where both frames carry path labels, pixels whose hit flags
+    agree but whose labels differ saw a different surface, checker cell or shadow state
+    along their path (a reflected checker edge, a shadow edge; with anti-aliasing, a sample
+    that grazed an edge in one frame only, even where the centre's ray missed in both):
+    like pixels whose hit flags differ, they are excused from
     the colour and display statistics if they lie within 1 px of a jump in the reference's
     label, and counted in ``path_differs``.
     """
@@ -229,17 +231,19 @@ def disagreements(a: Frame, b: Frame):
     """Where ``b`` saw something else than the reference ``a``, as four (H, W) bool masks.
 
     Returns ``(hit_differs, hit_excused, path_differs, near_jump)``: hit flags that differ,
-    those of them within 1 px of a's silhouette, pixels hit in both whose path labels differ
-    (all False unless both frames have labels), and pixels within 1 px of a jump in a's label.
+    those of them within 1 px of a's silhouette, pixels whose hit flags agree but whose path
+    labels differ (all False unless both frames have labels), and pixels within 1 px of a
+    jump in a's label. Pixels missed in both count too: with anti-aliasing the label folds
+    in every sample's (`reference_cpu.render.add_ray`), and a pixel whose centre misses may
+    still have samples that hit.
     """
     differs = a.hit != b.hit
     excused = differs & dilate(boundary(a.hit), 1)
-    both = a.hit & b.hit
     if a.path is not None and b.path is not None:
-        path_differs = both & (a.path != b.path)
+        path_differs = ~differs & (a.path != b.path)
         near_jump = dilate(boundary(a.path.astype(np.int64)), 1)
     else:
-        path_differs = near_jump = np.zeros_like(both)
+        path_differs = near_jump = np.zeros_like(differs)
     return differs, excused, path_differs, near_jump
 
 

@@ -18,7 +18,7 @@ from scene_model.motion import Motion
 from scene_model.keyframes import Keyframes, Orbit
 from scene_model.fields import field_types, show
 from scene_model.scene import (Background, Camera, Checker, Fog, Light, Material, RenderSettings,
-                               Scene)
+                               Scene, Texture)
 from scene_model.shapes import node_kinds
 
 BEGIN = "<!-- BEGIN GENERATED FIELD REFERENCE (python -m marchlab.docgen) -->"
@@ -59,7 +59,9 @@ def default_text(f: dataclasses.Field) -> str:
             return "absent"
         if isinstance(f.default, bool):
             return f"`{'true' if f.default else 'false'}`"
-        return f"`{json.dumps(f.default) if isinstance(f.default, str) else show(f.default)}`"
+        strings = isinstance(f.default, str) or (isinstance(f.default, tuple) and f.default
+                                                 and all(isinstance(v, str) for v in f.default))
+        return f"`{json.dumps(f.default) if strings else show(f.default)}`"
     if f.default_factory is not dataclasses.MISSING:
         return "see below"
     return "required"
@@ -97,6 +99,7 @@ def reference() -> str:
         out += section(f'`[render.background]` with `type = "{cls.kind}"`', cls)
     out += section("`[materials.NAME]`", Material)
     out += section("`[materials.NAME.checker]`", Checker)
+    out += section("`[materials.NAME.texture]`", Texture)
     for cls in Light.__subclasses__():
         out += section(f'`[[lights]]` with `type = "{cls.kind}"`', cls)
     out += ["### `[[objects]]`", "",

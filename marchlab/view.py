@@ -375,15 +375,9 @@ class Viewer:
     def light_markers(self) -> list[tuple[int, float, float]]:
         """(index, x, y): where each light with a position (point, spot) is marked in the
         view, in view pixels (lights behind the eye are left out)."""
-        from scene_model.camera import project
-        out = []
-        for i, light in enumerate(self.history.scene.lights):
-            if getattr(light, "position", None) is None:
-                continue
-            x, y, depth = project(self.camera, [light.position], *self.size)[0]
-            if math.isfinite(x) and depth > 0:
-                out.append((i, float(x), float(y)))
-        return out
+        from .light_marks import light_marks
+        return light_marks(dataclasses.replace(self.history.scene, camera=self.camera),
+                           *self.size)
 
     def press(self, x: float, y: float, shift: bool = False) -> str | None:
         """The left button went down on view pixel (x, y): take hold of what is there, for

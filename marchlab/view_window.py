@@ -22,6 +22,7 @@ import numpy as np
 from scene_model.errors import MarchlabError, SceneError
 from scene_model.fields import Record, color_range, field_types
 from scene_model.files import write_atomically
+from scene_model.sampling import pixel_max_steps
 from scene_model.shapes import Node, children, node_kinds
 from scene_model import editing
 
@@ -120,7 +121,9 @@ class ViewDrawer:
             return
         scene = viewer.history.scene
         self.display.draw(self.target, viewer.overlay, gamma=scene.render.gamma,
-                          max_steps=scene.render.max_steps, depth_range=self.depth,
+                          max_steps=pixel_max_steps(scene.render.max_steps,
+                                                    scene.render.samples),
+                          depth_range=self.depth,
                           selected=viewer.selected_ids(), viewport=viewport)
 
     def image(self, viewer: Viewer) -> np.ndarray:

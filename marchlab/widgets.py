@@ -30,9 +30,10 @@ import typing
 import numpy as np
 
 from scene_model.errors import MarchlabError
-from scene_model.fields import Range, color_range, field_types
+from scene_model.fields import Range, color_range, field_types, unit_interval
 from scene_model import editing
 
+from .light_marks import draw_marks
 from .view import OVERLAYS, SETTLE_SECONDS, Viewer, verdict
 
 WHEEL_NOTCH = 100.0        # a browser's deltaY for one notch of a mouse wheel
@@ -146,33 +147,12 @@ def call_later(seconds: float, callback):
         return None
 
 
-MARKER_COLOR = np.array([255, 230, 50], np.uint8)
-
-
 def mark_lights(image: np.ndarray, viewer: Viewer) -> np.ndarray:
     """``image`` with a yellow dot on each point or spot light (`Viewer.light_markers`),
     ringed in black, sized to the picture: where to press to drag the light."""
-    height, width = image.shape[:2]
-    scale = width / viewer.size[0]
-    radius = max(2.0, 5.0 * scale)
-    ring = radius + 1.5
-    out = image
-    for _, x, y in viewer.light_markers():
-        cx, cy = x * scale, y * scale
-        # Only the pixels near the mark: this runs for every frame the notebook draws.
-        top, bottom = max(int(cy - ring), 0), min(int(cy + ring) + 1, height)
-        left, right = max(int(cx - ring), 0), min(int(cx + ring) + 1, width)
-        if top >= bottom or left >= right:
-            continue
-        rows, cols = np.mgrid[top:bottom, left:right] + 0.5
-        distance = np.hypot(cols - cx, rows - cy)
-        if distance.min() > ring:
-            continue
-        out = out.copy() if out is image else out
-        patch = out[top:bottom, left:right]
-        patch[distance <= ring] = 0
-        patch[distance <= radius] = MARKER_COLOR
-    return out
+    scale = image.shape[1] / viewer.size[0]
+    marks = [(i, x * scale, y * scale) for i, x, y in viewer.light_markers()]
+    return draw_marks(image, marks, max(2.0, 5.0 * scale))
 
 
 def canvas(viewer: Viewer, **traits):
@@ -251,6 +231,8 @@ def _field_rules(scene, path: str):
 
 def _span(value, check) -> tuple[float, float]:
     """A slider's ends: the field's own range where it is finite, else around ``value``."""
+    if check is unit_interval:          # a weight or a share (ka, kd, kr, transparency)
+        return 0.0, 1.0
     low, high = (check.lo, check.hi) if isinstance(check, Range) else (-math.inf, math.inf)
     if not math.isfinite(low):
         low = min(0.0, value * 4)

@@ -77,8 +77,10 @@ def over_pixels(per_tile: np.ndarray, width: int, height: int, tile: int) -> np.
 def tile_cones(camera: Camera, width: int, height: int, tile: int, dtype=np.float64):
     """The cone of each tile of ``tile`` x ``tile`` pixels (tiles at the right and bottom
     edges may be smaller): the axis through the tile's centre and the half-angle that holds
-    the rays through all four corners of the tile, so every pixel's ray. ``tile_cone`` in
-    glsl/cone.glsl, for every tile at once.
+    the rays through all four corners of the tile, so the ray through every point of the
+    tile (the cone is convex, and such a ray's direction is a positive combination of the
+    corners'): every pixel's ray, and every anti-aliasing sample's, which lies inside its
+    pixel (`scene_model.sampling`). ``tile_cone`` in glsl/cone.glsl, for every tile at once.
 
     The angle between the axis a and a corner's ray r is measured as
     tan = |a x r| / (a . r): for the small angles of a tile, 1 - cos^2 would lose most of

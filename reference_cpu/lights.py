@@ -27,26 +27,64 @@ def light_at(light, p):
     distance : (N,) ndarray
         Distance to the light; inf for a directional light.
     radiance : (N, 3) ndarray
-        colour * intensity * attenuation (* spot cone factor).
+        colour * intensity * attenuation (* spot cone factor): the light's diffuse colour
+        (`scene_model.scene.Light.term_colors`), its colour unless it gives one.
     """
     dtype = p.dtype
     color = np.asarray(light.color, dtype=np.float64) * light.intensity
+    if light.separate_colors():
+        color = np.asarray(light.term_colors()[1], dtype=np.float64)
+    to_light, distance, factor, _ = light_geometry(light, p)
+    if factor is None:                                   # a directional light
+        return to_light, distance, np.broadcast_to(color.astype(dtype), p.shape)
+    return to_light, distance, factor[:, None] * color.astype(dtype)
+
+
+def light_geometry(light, p):
+    """Where one light is from points ``p`` (N, 3), and how much of it reaches them.
+
+    Returns
+    -------
+    to_light : (N, 3) ndarray
+    distance : (N,) ndarray
+        As `light_at`.
+    factor : (N,) ndarray or None
+        Attenuation times the spot cone (None for a directional light: 1 everywhere).
+    fade : (N,) ndarray or None
+        The attenuation alone, which a light's ambient term takes (None: 1 everywhere).
+    """
+    dtype = p.dtype
     if isinstance(light, DirectionalLight):
         direction = np.asarray(light.direction, dtype=np.float64)
         to_light = np.broadcast_to((-direction / np.linalg.norm(direction)).astype(dtype), p.shape)
-        return to_light, np.full(len(p), np.inf, dtype=dtype), np.broadcast_to(color.astype(dtype), p.shape)
+        return to_light, np.full(len(p), np.inf, dtype=dtype), None, None
 
     offset = np.asarray(light.position, dtype=dtype) - p
     distance = length(offset)
     to_light = offset / distance[:, None]
-    factor = attenuation(distance, light.constant, light.linear, light.quadratic)
+    fade = attenuation(distance, light.constant, light.linear, light.quadratic)
+    factor = fade
     if isinstance(light, SpotLight):
         axis = np.asarray(light.direction, dtype=np.float64)
         axis = (axis / np.linalg.norm(axis)).astype(dtype)
-        factor = factor * spot_cone(-dot(to_light, axis), light.inner_angle, light.outer_angle)
+        factor = fade * spot_cone(-dot(to_light, axis), light.inner_angle, light.outer_angle)
     elif not isinstance(light, PointLight):
         raise TypeError(f"unknown light type {type(light).__name__}")
-    return to_light, distance, factor[:, None] * color.astype(dtype)
+    return to_light, distance, factor, fade
+
+
+def light_terms(light, p):
+    """A light with its own colours (`scene_model.scene.Light.term_colors`) at points ``p``
+    (N, 3), before shadowing: ``to_light``, ``distance``, the falloff (N, 3) that scales the
+    diffuse and specular colours (``factor`` of `light_geometry` in every channel), and the
+    ambient light (N, 3), its colour times the attenuation alone."""
+    dtype = p.dtype
+    to_light, distance, factor, fade = light_geometry(light, p)
+    ambient = np.asarray(light.term_colors()[0], dtype=np.float64).astype(dtype)
+    if factor is None:
+        ones = np.ones(p.shape, dtype)
+        return to_light, distance, ones, np.broadcast_to(ambient, p.shape)
+    return to_light, distance, factor[:, None] * np.ones(3, dtype), fade[:, None] * ambient
 
 
 def attenuation(distance, constant, linear, quadratic):

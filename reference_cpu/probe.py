@@ -5,7 +5,9 @@ same camera ray (scene_model.camera), SDF, settings, relaxation and culling (the
 of render.py and `march` of march.py). At every step it records how far along the ray the
 march stands (t) and the distance the SDF reports there, through march's ``observe`` hook.
 Its step count and its last t are the frame's ``steps`` and ``depth`` at that pixel, bit for
-bit (tests/test_probe.py), so the plot explains the number the steps heat map shows.
+bit (tests/test_probe.py), so the plot explains the number the steps heat map shows. (With
+anti-aliasing the ray through the pixel's centre still gives its depth, but its steps are
+the sum over all the pixel's rays: `scene_model.sampling`.)
 
 Plain sphere tracing (Hart 1996) steps by the distance itself: t[k+1] = t[k] + d[k], and the
 ray hits at the first step with d < epsilon or misses once t + d passes max_distance.

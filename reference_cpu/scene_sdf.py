@@ -4,7 +4,8 @@
 points ``p : (N, 3)``. Parameters are converted to the render's dtype up front, as a shader
 receives them as uniforms. Each primitive's object id is its depth-first index
 (`scene_model.shapes.primitives`); at any point the id is that of the primitive whose distance the
-operators chose (the nearer one for a union, the farther one for an intersection).
+operators chose (the nearer one for a union, the farther one for an intersection, the one
+that weighs more in a morph).
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ import numpy as np
 
 from scene_model.geometry import rotation_matrix
 from scene_model.shapes import (Box, CappedCylinder, Capsule, Cone, Disk, HexPrism, Intersection,
-                                Node, Plane, Pyramid, Repeat, Rotate, RoundBox, Scale,
+                                Morph, Node, Plane, Pyramid, Repeat, Rotate, RoundBox, Scale,
                                 SmoothIntersection, SmoothSubtraction, SmoothUnion, Sphere,
                                 Subtraction, Torus, Translate, Union)
 
@@ -147,6 +148,8 @@ def _build(node: Node, dtype: np.dtype, with_ids: bool, next_id) -> SDF:
         case Repeat():
             inner, period, count = child(), vec(node.period), vec(node.count)
             return lambda p: inner(S.op_repeat_limited(p, period, count))
+        case Morph():
+            return _morph(node, f(node.t), dtype, with_ids, next_id)
 
     combine, keeps_first = _COMBINE[type(node)]
     parts = [_build(c, dtype, with_ids, next_id) for c in node.children]
@@ -161,6 +164,18 @@ def _build(node: Node, dtype: np.dtype, with_ids: bool, next_id) -> SDF:
             d = combine(d, d2, k)
         return d, ids
     return combined
+
+
+def _morph(node, t, dtype, with_ids, next_id) -> SDF:
+    """The blend of the two children; the object id is the first child's where t <= 1/2 (it
+    weighs at least as much), the second's above: one id for the whole shape, at any t."""
+    first = _build(node.children[0], dtype, with_ids, next_id)
+    second = _build(node.children[1], dtype, with_ids, next_id)
+
+    def morphed(p):
+        (d1, ids1), (d2, ids2) = first(p), second(p)
+        return S.op_morph(d1, d2, t), ids1 if t <= 0.5 else ids2
+    return morphed
 
 
 def _scaled(result, factor):

@@ -231,6 +231,18 @@ def op_smooth_intersection(d1, d2, k):
     return _mix(d2, d1, h) + k * h * (1 - h)
 
 
+def op_morph(d1, d2, t):
+    """Shape 1 turning into shape 2 as ``t`` goes from 0 to 1: (1 - t) d1 + t d2.
+
+    A linear interpolation of two distances (GLSL's ``mix``). For t in [0, 1] it is
+    1-Lipschitz when d1 and d2 are, and so a distance bound in Hart's sense (J. C. Hart,
+    "Sphere tracing", The Visual Computer 12(10), 1996): safe to march, but not an exact
+    distance. Written as two products and a sum (not d1 + t (d2 - d1)) so that t = 0 gives
+    d1 and t = 1 gives d2 exactly.
+    """
+    return (1 - t) * d1 + t * d2
+
+
 # --- Moving the query point (transforms) ---------------------------------------------------------
 
 def op_translate(p, offset):

@@ -15,12 +15,16 @@ where N.L <= 0 so that a light behind a surface cannot make a highlight on it.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 
 from scene_model.colormaps import heat
+from scene_model.environment import ENVIRONMENT_KINDS
 from scene_model.geometry import dot, normalize
+
+from .environment import background_environment
 
 
 
@@ -36,6 +40,11 @@ class Surface:
     ks: np.ndarray          # (N,)
     shininess: np.ndarray   # (N,)
     object_id: np.ndarray | None = None   # (N,) int, where known
+
+    def select(self, rows) -> "Surface":
+        """The points picked by ``rows`` (a mask or indices)."""
+        values = (getattr(self, f.name) for f in dataclasses.fields(self))
+        return Surface(*(None if v is None else v[rows] for v in values))
 
 
 def reflect(d, n):
@@ -83,12 +92,30 @@ def shade_toon(s: Surface, incoming, ambient, bands):
     return _lit(s, incoming, ambient, lambda x: toon_band(x, bands), specular_phong)
 
 
+def shade_stripes(s: Surface, incoming, ambient, stripes):
+    """Phong with the diffuse and specular terms drawn as ``stripes`` stripes
+    (`stripes_band`): contour lines of the light, a sawtooth of its strength."""
+    return _lit(s, incoming, ambient, lambda x: stripes_band(x, stripes), specular_phong)
+
+
 def _lit(s, incoming, ambient, shape, specular):
+    """The sum over ``incoming``, one tuple per light: ``(L, radiance)``, or ``(L, radiance,
+    specular, ambient)``: a light with its own ambient, diffuse and specular colours
+    (`scene_model.scene.Light`) gives the specular radiance and the ambient light it sends
+    (radiance is then the diffuse one); None in either place means as a plain light."""
     color = s.ka[:, None] * s.albedo * ambient
-    for to_light, radiance in incoming:
+    for to_light, radiance, *own in incoming:
         d = shape(diffuse(s.normal, to_light))
         sp = shape(specular(s.normal, to_light, s.view, s.shininess))
-        color = color + radiance * (s.kd[:, None] * d[:, None] * s.albedo + (s.ks * sp)[:, None])
+        light_specular, light_ambient = own or (None, None)
+        if light_specular is None:
+            color = color + radiance * (s.kd[:, None] * d[:, None] * s.albedo
+                                        + (s.ks * sp)[:, None])
+        else:
+            color = (color + radiance * (s.kd[:, None] * d[:, None] * s.albedo)
+                     + light_specular * (s.ks * sp)[:, None])
+        if light_ambient is not None:
+            color = color + s.ka[:, None] * s.albedo * light_ambient
     return color
 
 
@@ -103,6 +130,18 @@ def toon_band(x, bands):
     level = np.floor(q)
     step = smoothstep(0.9, 1.0, q - level)
     return np.minimum((level + step) / (bands - 1), 1)
+
+
+def stripes_band(x, stripes):
+    """A sawtooth of x in [0, 1] with ``stripes`` teeth: u = frac(stripes x), rising from 0
+    to 1 across each stripe (the "ramp" of Blinn-Phong stripes shaders).
+
+    Each tooth falls back to 0 over its last tenth by a smoothstep, as `toon_band` steps, so
+    the colour stays continuous and the stripes' edges are no discontinuity.
+    """
+    q = x * stripes
+    u = q - np.floor(q)
+    return u * (1 - smoothstep(0.9, 1.0, u))
 
 
 def smoothstep(edge0, edge1, x):
@@ -144,12 +183,15 @@ def apply_fog(color, t, fog_color, density):
 
 
 def background(direction, bg):
-    """What a ray that hits nothing sees: a solid colour, or a sky gradient by the ray's y.
+    """What a ray that hits nothing sees: a solid colour, a sky gradient by the ray's y, or
+    an environment map (`reference_cpu.environment`).
 
     The sky blends ``bottom`` to ``top`` by a = (d.y + 1) / 2, as in "Ray Tracing in One
     Weekend" (Shirley), so straight down is ``bottom`` and straight up is ``top``.
     """
     dtype = direction.dtype
+    if bg.kind in ENVIRONMENT_KINDS:
+        return background_environment(direction, bg)
     if bg.kind == "solid":
         return np.broadcast_to(np.asarray(bg.color, dtype=dtype), direction.shape)
     a = (direction[:, 1:2] + 1) / 2

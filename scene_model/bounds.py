@@ -16,6 +16,7 @@ does to the solid (the set where the distance is <= 0):
   is within k/4 of the union's, and a fold over n children within (n - 1) k/4: the enclosing
   sphere grows by that much; the smooth intersection
   and subtraction only add to the distance, so they keep the sharp rules;
+- a morph's (1 - t) d1 + t d2 is at least min(d1, d2), so its solid is inside the union's;
 - transforms move, turn and scale the sphere; limited repetition encloses every copy.
 
 A plane or an infinite repetition has no bounding sphere (None).
@@ -28,8 +29,8 @@ import math
 import numpy as np
 
 from .geometry import rotation_matrix
-from .shapes import (Box, CappedCylinder, Capsule, Cone, Disk, HexPrism, Intersection, Node, Plane,
-                     Pyramid, Repeat, Rotate, RoundBox, Scale, SmoothIntersection,
+from .shapes import (Box, CappedCylinder, Capsule, Cone, Disk, HexPrism, Intersection, Morph, Node,
+                     Plane, Pyramid, Repeat, Rotate, RoundBox, Scale, SmoothIntersection,
                      SmoothSubtraction, SmoothUnion, Sphere, Subtraction, Torus, Translate, Union)
 
 # A sphere as (centre (3,) float64 ndarray, radius), or None for an unbounded shape.
@@ -86,7 +87,7 @@ def bounding_sphere(node: Node) -> Sphere_:
                 return None
             reach = np.asarray(node.period, float) * np.asarray(node.count, float)
             return inner[0], inner[1] + float(np.linalg.norm(reach))   # the farthest copy
-        case Union() | SmoothUnion():
+        case Union() | SmoothUnion() | Morph():
             parts = [bounding_sphere(c) for c in node.children]
             if any(part is None for part in parts):
                 return None

@@ -10,7 +10,8 @@
                              "default": Material()})
 
 Each function returns a node of `scene_model.shapes`; the node's methods ``at``, ``rotate``,
-``scale``, ``repeat``, ``smooth_union``... and the operators ``|``, ``&``, ``-`` combine them.
+``scale``, ``repeat``, ``smooth_union``..., ``morph`` (``a.morph(b, t)``: a turning into b as t
+goes from 0 to 1) and the operators ``|``, ``&``, ``-`` combine them.
 """
 
 from __future__ import annotations
@@ -18,15 +19,17 @@ from __future__ import annotations
 from functools import reduce
 
 from .bodies import Body, PhysicsSettings
-from .scene import (Camera, Checker, DirectionalLight, Fog, Material, PointLight, RenderSettings,
-                    Scene, SkyBackground, SolidBackground, SpotLight)
+from .scene import (Camera, Checker, CubeMapBackground, DirectionalLight, EquirectBackground, Fog,
+                    Material, PointLight, RenderSettings, Scene, SkyBackground, SolidBackground,
+                    SpotLight, StudioBackground, Texture)
 from .shapes import (Box, CappedCylinder, Capsule, Cone, Disk, HexPrism, Node, Plane, Pyramid,
                      RoundBox, Sphere, Torus)
 
 __all__ = ["sphere", "box", "round_box", "plane", "torus", "capped_cylinder", "capsule", "cone",
            "pyramid", "disk", "hex_prism", "union", "intersection", "Scene", "Camera",
            "RenderSettings", "Material", "Checker", "PointLight", "DirectionalLight", "SpotLight",
-           "Fog", "SkyBackground", "SolidBackground", "Body", "PhysicsSettings"]
+           "Fog", "SkyBackground", "SolidBackground", "CubeMapBackground", "EquirectBackground",
+           "StudioBackground", "Texture", "Body", "PhysicsSettings"]
 
 
 def _half_size(x, y, z):

@@ -30,7 +30,8 @@ MAX_SIDE = 16384      # the usual largest GPU texture; far beyond what a lesson 
 # float64: colour 12, depth 8, normal 24, steps, object id and path label 4 each, hit 1) and
 # the primary rays' directions while it runs: about 85 bytes a pixel measured at 2000x2000,
 # 100 with the 8-bit picture made when it is saved. 4 GiB of that is 42,949,672 pixels, so
-# 8K UHD (7680x4320) fits and 10000x10000 does not.
+# 8K UHD (7680x4320) fits and 10000x10000 does not. Anti-aliasing (render.samples > 1) adds
+# the running sum of the samples' colours, 24 bytes a pixel more in float64.
 MAX_IMAGE_BYTES = 4 * 2**30
 BYTES_PER_PIXEL = 100
 MAX_PIXELS = MAX_IMAGE_BYTES // BYTES_PER_PIXEL
@@ -64,8 +65,10 @@ def camera_basis(camera: Camera) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return forward, right, np.cross(right, forward)
 
 
-def camera_rays(camera: Camera, width: int, height: int, dtype=np.float64):
-    """The primary ray of every pixel.
+def camera_rays(camera: Camera, width: int, height: int, dtype=np.float64,
+                offset=(0.0, 0.0)):
+    """The primary ray of every pixel: through its centre, or through the point ``offset``
+    from it (an anti-aliasing sample, `scene_model.sampling`).
 
     Parameters
     ----------
@@ -74,6 +77,10 @@ def camera_rays(camera: Camera, width: int, height: int, dtype=np.float64):
         Image size W, H in pixels.
     dtype : numpy dtype
         float32 or float64 for the per-pixel arithmetic.
+    offset : (dx, dy) floats
+        In pixels from the pixel's centre, x right and y down: pixel (x, y)'s ray goes
+        through the image point (x + 0.5 + dx, y + 0.5 + dy), added in ``dtype`` in that
+        order (as the generated programs add them). (0, 0) changes no bit.
 
     Returns
     -------
@@ -83,8 +90,9 @@ def camera_rays(camera: Camera, width: int, height: int, dtype=np.float64):
         Unit direction of the ray through pixel (x, y) at ``directions[y, x]``.
     """
     dtype = np.dtype(dtype)
-    x = np.arange(width, dtype=dtype) + dtype.type(0.5)
-    y = np.arange(height, dtype=dtype) + dtype.type(0.5)
+    dx, dy = (dtype.type(v) for v in offset)
+    x = np.arange(width, dtype=dtype) + dtype.type(0.5) + dx
+    y = np.arange(height, dtype=dtype) + dtype.type(0.5) + dy
     directions = image_rays(camera, x[None, :], y[:, None], width, height, dtype)
     return np.asarray(camera.position, dtype=dtype), directions
 

@@ -28,19 +28,23 @@ class Frame:
     normal : (H, W, 3) ndarray
         Unit surface normal at the hit; 0 on a miss.
     steps : (H, W) int32 ndarray
-        SDF evaluations the primary ray took.
+        SDF evaluations the primary ray took; with anti-aliasing (``render.samples`` > 1),
+        the sum over all the pixel's primary rays (`scene_model.sampling`), whose centre ray
+        gives depth, normal, object_id and hit, while color is the mean of the samples'.
     object_id : (H, W) int32 ndarray
         Depth-first index of the primitive hit (`scene_model.shapes.primitives`); -1 on a miss.
     hit : (H, W) bool ndarray
     gamma : float
         Display gamma used by `image` and `save`.
     max_steps : int
-        The march limit, the top of the steps colour scale.
+        The top of the steps colour scale: the march limit, times the primary rays a pixel
+        shoots (`scene_model.sampling.pixel_max_steps`).
     backend, precision : str
         Which renderer made the frame, at which floating-point precision.
     path : (H, W) uint32 ndarray or None
-        A label of what the pixel's path saw: the object ids, checker cells and hard-shadow
-        states along the primary ray and its mirror bounces. Where it changes between
+        A label of what the pixel's paths saw: the object ids, checker cells and hard-shadow
+        states along the primary ray and its mirror and glass rays (docs/reflections.md,
+        "Path labels"). Where it changes between
         neighbours the image is discontinuous (a reflected checker edge, a shadow edge), and
         two correct renderers may disagree there. A 24-bit hash; None where a backend
         does not compute it.
@@ -89,10 +93,7 @@ class Frame:
 
     def png(self, aov: str = "color") -> bytes:
         """The PNG file of `image` (``aov``), as bytes."""
-        from PIL import Image
-        buffer = io.BytesIO()
-        Image.fromarray(self.image(aov)).save(buffer, format="PNG")
-        return buffer.getvalue()
+        return png_bytes(self.image(aov))
 
     def _repr_png_(self) -> bytes:
         """A notebook shows a frame as its picture (IPython's rich display protocol)."""
@@ -131,6 +132,14 @@ class Frame:
                        backend=str(data["backend"]), precision=str(data["precision"]),
                        path=data["path"] if "path" in data else None,
                        dither=bool(data["dither"]) if "dither" in data else False)
+
+
+def png_bytes(image: np.ndarray) -> bytes:
+    """The PNG file of an 8-bit (H, W, 3) picture, as bytes."""
+    from PIL import Image
+    buffer = io.BytesIO()
+    Image.fromarray(image).save(buffer, format="PNG")
+    return buffer.getvalue()
 
 
 def to_uint8(x: np.ndarray, offsets: np.ndarray | None = None) -> np.ndarray:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 from dataclasses import dataclass
 from typing import ClassVar, Literal
 
@@ -16,8 +17,9 @@ from .bodies import FRICTION, Body, PhysicsSettings, body_node
 from .motion import Motion, posed_objects
 from .keyframes import Keyframes, Orbit
 from .errors import SceneError
-from .fields import (DIRECTION, POINT, SIZE, Color, Range, Record, Vec3, color_range, number_text,
-                     param, unit_interval)
+from .sampling import MAX_SAMPLES, SamplePattern
+from .fields import (DIRECTION, POINT, SIZE, Color, Each, Range, Record, Rule, Vec3,
+                     color_range, number_text, param, unit_interval)
 from .shapes import Node, children, primitives
 
 
@@ -53,23 +55,87 @@ class Checker(Record):
     scale: float = param(1.0, "Side of a square.", SIZE)
 
 
+# Built-in images a Texture may name instead of a file (scene_model/textures.py makes them).
+BUILTIN_TEXTURES = ("uv_grid",)
+
+
+def _is_file_name(value: str) -> bool:
+    """Whether a Texture's ``image`` names a file (it has an extension or a folder), not a
+    built-in image."""
+    return "." in os.path.basename(value) or os.sep in value or "/" in value
+
+
+@dataclass(frozen=True)
+class Texture(Record):
+    """An image on a surface in place of the material's colour, filtered bilinearly and
+    repeated every ``scale`` world units (docs/phong.md, "Textures"): mapped by ``triplanar``
+    projection along the three world axes, blended by the normal (Geiss 2007), or by ``uv``,
+    a sphere's latitude and longitude and, on any other primitive, the projection along the
+    world axis nearest its normal (exact on planes and boxes aligned with the axes)."""
+    image: str = param("uv_grid", "An image file (relative to the scene file; PNG, JPEG, "
+                                  "TIFF or a .npy array, as an environment's), or a built-in "
+                                  "image: uv_grid.",
+                       Rule(lambda v: bool(v.strip()), "must name an image file or a "
+                                                       "built-in image", "a file or uv_grid"))
+    mapping: Literal["triplanar", "uv"] = param("triplanar", "triplanar (three projections "
+                                                             "blended by the normal) or uv.")
+    scale: float = param(1.0, "World units per repeat of the image (a sphere's uv wraps "
+                              "it around once).", SIZE)
+    sharpness: float = param(4.0, "Triplanar: the exponent k of the blend weights |n_i|^k "
+                                  "(larger: narrower blends between the projections).",
+                             Range(1.0, 64.0))
+    tint: Color = param((1.0, 1.0, 1.0), "Multiplier of the image's linear colours.",
+                        color_range)
+
+    def check(self):
+        if not _is_file_name(self.image) and self.image not in BUILTIN_TEXTURES:
+            raise SceneError(f"is no built-in image (built-in: {', '.join(BUILTIN_TEXTURES)}"
+                             f"; a file needs its extension) (got {self.image!r})", ("image",))
+
+    def relative_to(self, folder) -> "Texture":
+        """This texture with its image file read relative to ``folder`` (a built-in image
+        stays as it is)."""
+        if self.image in BUILTIN_TEXTURES:
+            return self
+        return dataclasses.replace(self, image=_joined(folder, self.image))
+
+
 @dataclass(frozen=True)
 class Material(Record):
-    """Phong material (Phong 1975; mirror weight after Whitted 1980): colour and the
-    ambient/diffuse/specular/mirror weights."""
+    """Phong material (Phong 1975; mirror and glass weights after Whitted 1980): colour, the
+    ambient/diffuse/specular/mirror weights, and for glass its transparency, index of
+    refraction and absorption."""
     color: Color = param((0.8, 0.8, 0.8), "Albedo (linear RGB).", color_range)
     ka: float = param(0.1, "Ambient weight.", unit_interval)
     kd: float = param(0.8, "Diffuse weight.", unit_interval)
     ks: float = param(0.3, "Specular weight.", unit_interval)
     shininess: float = param(32.0, "Specular exponent alpha.", Range(1.0, 10000.0))
     kr: float = param(0.0, "Mirror reflectivity: weight of the reflected colour.", unit_interval)
+    transparency: float = param(0.0, "Glass: the weight of the light through the surface, "
+                                     "split by Fresnel between reflection and refraction (0: "
+                                     "opaque).", unit_interval)
+    ior: float = param(1.5, "Glass: index of refraction of the solid (air outside is 1).",
+                       Range(1.0, 4.0))
+    absorption: Color = param((0.0, 0.0, 0.0), "Glass: Beer-Lambert absorption per metre "
+                                                "travelled inside, per channel.",
+                              Each(Range(0.0, 1e3)))
     checker: Checker | None = param(None, "Optional checker pattern replacing ``color``.")
+    texture: Texture | None = param(None, "Optional image replacing ``color`` (not with "
+                                          "``checker``).")
+    shading: Shading | None = param(None, "This object's shading model where the render's "
+                                          "is a lit one (phong, blinn_phong, toon, stripes); "
+                                          "absent: the render's.")
     restitution: float | None = param(None, "Coefficient of restitution of a static object of "
                                             "this material, for the bodies; absent: "
                                             "[physics] plane_restitution.", unit_interval)
     friction: float | None = param(None, "Coefficient of friction of a static object of this "
                                          "material, for the bodies; absent: [physics] "
                                          "plane_friction.", FRICTION)
+
+    def check(self):
+        if self.checker is not None and self.texture is not None:
+            raise SceneError("give checker or texture, not both: each replaces color",
+                             ("texture",))
 
 
 # --- Lights ----------------------------------------------------------------------------------
@@ -83,8 +149,32 @@ SPOT_EDGE = 0.1       # degrees: the narrowest soft edge of a spot light
 
 
 class Light(Record):
-    """Base of the light types; ``kind`` is the ``type`` in a scene file."""
+    """Base of the light types; ``kind`` is the ``type`` in a scene file.
+
+    A light sends ``color`` x ``intensity`` to the diffuse and specular terms. It may instead
+    give separate ``ambient``, ``diffuse`` and ``specular`` colours, each also multiplied by
+    ``intensity``, as the lights of OpenGL 1.x and LearnOpenGL do ("Lighting maps",
+    "Multiple lights"): a missing one of diffuse and specular is ``color``, a missing ambient
+    is none. A light's ambient term lights every point it reaches, shadowed or not, fading
+    with distance as the rest does (not with a spot light's cone).
+    """
     kind: ClassVar[str] = ""
+
+    def separate_colors(self) -> bool:
+        """Whether the light gives an ambient, diffuse or specular colour of its own."""
+        return any(getattr(self, k) is not None for k in ("ambient", "diffuse", "specular"))
+
+    def term_colors(self) -> tuple[tuple, tuple, tuple]:
+        """(ambient, diffuse, specular) colours times intensity; ambient 0 where absent."""
+        pick = lambda c: tuple(self.intensity * x for x in (c or self.color))
+        ambient = tuple(self.intensity * x for x in self.ambient) if self.ambient else (0.0,) * 3
+        return ambient, pick(self.diffuse), pick(self.specular)
+
+
+def _term(name: str):
+    """The field of a light's own ambient, diffuse or specular colour."""
+    return param(None, f"Colour of the light's {name} term (times intensity); absent: "
+                       + ("none." if name == "ambient" else "``color``."), color_range)
 
 
 @dataclass(frozen=True)
@@ -99,6 +189,9 @@ class PointLight(Light):
                                  "is at most 1 / constant.", CONSTANT)
     linear: float = param(0.0, "Linear attenuation term.", ATTENUATION)
     quadratic: float = param(0.0, "Quadratic attenuation term.", ATTENUATION)
+    ambient: Color | None = _term("ambient")
+    diffuse: Color | None = _term("diffuse")
+    specular: Color | None = _term("specular")
 
 
 @dataclass(frozen=True)
@@ -108,6 +201,9 @@ class DirectionalLight(Light):
     direction: Vec3 = param((-0.4, -1.0, -0.6), "Direction the light travels in.", DIRECTION)
     color: Color = param((1.0, 1.0, 1.0), "Colour.", color_range)
     intensity: float = param(1.0, "Multiplier of the colour.", INTENSITY)
+    ambient: Color | None = _term("ambient")
+    diffuse: Color | None = _term("diffuse")
+    specular: Color | None = _term("specular")
 
 
 @dataclass(frozen=True)
@@ -129,6 +225,9 @@ class SpotLight(Light):
                                  "is at most 1 / constant.", CONSTANT)
     linear: float = param(0.0, "Linear attenuation term.", ATTENUATION)
     quadratic: float = param(0.0, "Quadratic attenuation term.", ATTENUATION)
+    ambient: Color | None = _term("ambient")
+    diffuse: Color | None = _term("diffuse")
+    specular: Color | None = _term("specular")
 
     def check(self):
         # The soft edge divides by cos(inner) - cos(outer); float32 must still tell them apart.
@@ -142,6 +241,11 @@ class SpotLight(Light):
 class Background(Record):
     """Base of the background types: what a ray that hits nothing sees."""
     kind: ClassVar[str] = ""
+
+    def relative_to(self, folder) -> "Background":
+        """This background with its image files read relative to ``folder`` (a scene file's
+        own folder); one without files is returned as it is."""
+        return self
 
 
 @dataclass(frozen=True)
@@ -160,6 +264,70 @@ class SkyBackground(Background):
     top: Color = param((0.35, 0.55, 0.9), "Colour for a ray pointing straight up.", color_range)
 
 
+# The environment maps (scene_model/environment.py turns them into texels): what every miss
+# sees, mirrors included. Their two numbers are a frame's, not the images'. Image files: PNG,
+# JPEG or TIFF of 8 or 16 bits (sRGB, decoded to linear), or floats (a 32-bit TIFF, a .npy
+# array), taken as linear.
+
+def _exposure():
+    return param(1.0, "Multiplier of the image's linear colours.", INTENSITY)
+
+
+def _turn():
+    return param(0.0, "Degrees the environment is turned about +y (+x toward -z).",
+                 Range(-360.0, 360.0))
+
+
+CUBE_FACES = ("+x", "-x", "+y", "-y", "+z", "-z")
+
+
+def _joined(folder, path: str) -> str:
+    """``path`` read relative to ``folder``; an absolute path stays as it is, to the letter."""
+    return path if os.path.isabs(path) else os.path.normpath(os.path.join(folder, path))
+
+
+@dataclass(frozen=True)
+class CubeMapBackground(Background):
+    """A cube map: six square images of one size, looked up by the ray's direction as OpenGL
+    does (OpenGL 4.6 core spec, section 8.13) and filtered bilinearly."""
+    kind: ClassVar[str] = "cubemap"
+    faces: tuple[str, ...] = param(
+        ("px.png", "nx.png", "py.png", "ny.png", "pz.png", "nz.png"),
+        "Six image files, in the order +x, -x, +y, -y, +z, -z (relative to the scene file).",
+        Rule(lambda v: len(v) == 6 and all(p.strip() for p in v),
+             "must list six image files (+x, -x, +y, -y, +z, -z)", "6 files"))
+    intensity: float = _exposure()
+    rotation: float = _turn()
+
+    def relative_to(self, folder) -> "CubeMapBackground":
+        return dataclasses.replace(self, faces=tuple(_joined(folder, p) for p in self.faces))
+
+
+@dataclass(frozen=True)
+class EquirectBackground(Background):
+    """An equirectangular (latitude-longitude) panorama: one image, 360 degrees around and
+    180 degrees top to bottom, its centre straight ahead along -z."""
+    kind: ClassVar[str] = "equirect"
+    image: str = param("panorama.png", "The image file (relative to the scene file).",
+                       Rule(lambda v: bool(v.strip()), "must name an image file", "a file"))
+    intensity: float = _exposure()
+    rotation: float = _turn()
+
+    def relative_to(self, folder) -> "EquirectBackground":
+        return dataclasses.replace(self, image=_joined(folder, self.image))
+
+
+@dataclass(frozen=True)
+class StudioBackground(Background):
+    """marchlab's own cube map, computed, not loaded (scene_model/environment.py): a grey
+    floor, a sky with a sun and four coloured soft boxes, so that a mirror shows where it
+    looks."""
+    kind: ClassVar[str] = "studio"
+    size: int = param(64, "Texels along each side of a cube face.", Range(2, 256))
+    intensity: float = _exposure()
+    rotation: float = _turn()
+
+
 @dataclass(frozen=True)
 class Fog(Record):
     """Exponential distance fog: colour mixed in by 1 - exp(-density t)."""
@@ -173,7 +341,9 @@ MAX_STEPS = 100_000
 MAX_REFLECTION_DEPTH = 16
 
 
-Shading = Literal["phong", "blinn_phong", "toon", "normals", "depth", "steps"]
+Shading = Literal["phong", "blinn_phong", "toon", "stripes", "normals", "depth", "steps"]
+# The lit models: the others show a buffer (normals, depth, steps) instead of light.
+LIT_SHADING = ("phong", "blinn_phong", "toon", "stripes")
 
 
 @dataclass(frozen=True)
@@ -198,6 +368,12 @@ class RenderSettings(Record):
                 "tile's cone got to; only empty space is skipped, docs/sphere-tracing.md).")
     prepass_tile: int = param(8, "Cone pre-pass: the tile's width and height in pixels.",
                               Range(2, 64))
+    samples: int = param(1, "Anti-aliasing: n x n rays per pixel, its colour their mean "
+                            "(1: one ray through the centre; scene_model/sampling.py).",
+                         Range(1, MAX_SAMPLES))
+    sample_pattern: SamplePattern = param(
+        "regular", "Anti-aliasing: where the n x n samples go, a regular grid or the rotated "
+                   "grid (RGSS), whose samples all differ in x and in y.")
     normal_method: Literal["central", "tetrahedron"] = param(
         "central", "Gradient estimate: central differences (6 evaluations) or Quilez's "
                    "tetrahedron (4).")
@@ -208,11 +384,13 @@ class RenderSettings(Record):
                               Range(0.1, 1000.0, positive=True))
     surface_offset: float = param(0.01, "Secondary rays start this far out along the normal.",
                                   Range(0.0, 1.0))
-    reflection_depth: int = param(0, "Mirror bounces after the first hit.",
-                                  Range(0, MAX_REFLECTION_DEPTH))
+    reflection_depth: int = param(0, "Depth of the ray tree: mirror and glass bounces "
+                                     "after the first hit.", Range(0, MAX_REFLECTION_DEPTH))
+    fresnel: Literal["exact", "schlick"] = param(
+        "exact", "Glass: Fresnel's equations, or Schlick's approximation of them.")
     shading: Shading = param("phong", "Shading mode.")
-    toon_bands: int = param(4, "Toon shading: number of brightness bands (an 8-bit image "
-                               "shows at most 256).", Range(2, 256))
+    toon_bands: int = param(4, "Toon and stripes shading: number of brightness bands, or of "
+                               "stripes (an 8-bit image shows at most 256).", Range(2, 256))
     ambient: Color = param((1.0, 1.0, 1.0), "Ambient light colour i_a.", color_range)
     dither: bool = param(False, "Ordered (8x8 Bayer) dithering of the 8-bit image: a fine "
                                 "pattern instead of bands in smooth gradients.")
@@ -352,6 +530,15 @@ def scene_at(scene: Scene, positions, time: float | None = None, rotations=None)
         return dataclasses.replace(scene, bodies=bodies)
     return dataclasses.replace(scene, bodies=bodies, motions=(),
                                objects=posed_objects(scene.objects, scene.motions, time))
+
+
+def shading_modes(scene: Scene) -> list[str]:
+    """The shading model of every primitive, in object-id order: its material's ``shading``
+    where it gives one and the render's is lit; else the render's. (A render shading of
+    normals, depth or steps shows that buffer everywhere: a debugging view.)"""
+    mode = scene.render.shading
+    chosen = [scene.materials[p.material].shading for p in primitives(scene.objects)]
+    return [(c or mode) if mode in LIT_SHADING else mode for c in chosen]
 
 
 def rendered_scene(scene: Scene) -> Scene:

@@ -7,6 +7,8 @@ lights, background). One shorthand keeps files short: any object table may carry
 shorthand wherever it applies, so ``load_scene(p) == scene`` after ``save_scene(scene, p)``.
 
 Every error names the file and the path of the field inside it (``objects[2].radius``).
+Image files that a scene file names (an environment's, a texture's) are read relative to its
+folder.
 """
 
 from __future__ import annotations
@@ -89,9 +91,23 @@ def load_scene(name_or_path: str | os.PathLike, overrides: list[str] = ()) -> Sc
     try:
         for assignment in overrides:
             apply_override(data, assignment)
-        return scene_from_dict(data)
+        scene = scene_from_dict(data)
     except SceneError as err:
         raise err.in_file(source) from None
+    return with_files_from(scene, path.parent)
+
+
+def with_files_from(scene: Scene, folder) -> Scene:
+    """``scene`` with the image files it names (an environment's, the materials' textures)
+    read relative to ``folder``, the folder of the scene file, as a scene file means them."""
+    background = scene.render.background.relative_to(folder)
+    materials = {name: m if m.texture is None else dataclasses.replace(
+                     m, texture=m.texture.relative_to(folder))
+                 for name, m in scene.materials.items()}
+    if background == scene.render.background and materials == scene.materials:
+        return scene
+    return dataclasses.replace(scene, materials=materials, render=dataclasses.replace(
+        scene.render, background=background))
 
 
 def scene_from_dict(data: dict) -> Scene:

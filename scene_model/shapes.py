@@ -14,7 +14,7 @@ from typing import ClassVar, Iterator
 
 from .errors import SceneError
 from .fields import (COORDINATE, DIRECTION, MAX_DEGREES, MIN_SIZE, POINT, SIZE, SIZES, Each, Int3,
-                     Range, Record, Rule, Vec3, number_text, param, show)
+                     Range, Record, Rule, Vec3, number_text, param, show, unit_interval)
 
 # The deepest tree a scene may hold: a primitive is 1 level, each operator or transform above
 # it one more. Every engine walks the tree recursively (Python allows 1000 frames, a shader
@@ -55,6 +55,9 @@ class Node(Record):
 
     def smooth_subtraction(self, other: Node, k: float) -> Node:
         return SmoothSubtraction((self, other), k)
+
+    def morph(self, other: Node, t: float) -> Node:
+        return Morph((self, other), t)
 
     # Transforms wrap the node; they apply in the order written, like matrix products read
     # right to left: ``box.rotate(0, 45, 0).at(0, 1, 0)`` turns the box, then moves it.
@@ -258,6 +261,32 @@ class SmoothSubtraction(Node):
     children: tuple[Node, ...] = param(doc="The shape, then what is cut from it.",
                                        check=at_least_one)
     k: float = param(0.25, "Width of the blend.", SIZE)
+
+
+def exactly_two(kids) -> None:
+    """The check of a morph's children: a blend has two ends."""
+    if len(kids) != 2:
+        raise SceneError(f"must have exactly 2 children (got {len(kids)})")
+
+
+exactly_two.allowed = "exactly 2"
+
+
+@dataclass(frozen=True)
+class Morph(Node):
+    """The first child turning into the second: d = (1 - t) d0 + t d1 (GLSL's mix).
+
+    A bound, not an exact distance: with weights 1 - t and t in [0, 1] the mix of two
+    1-Lipschitz distances is 1-Lipschitz, so |d| never exceeds the distance to the surface
+    d = 0 and the march needs no safety factor (docs/sphere-tracing.md, "Morph"). Outside
+    [0, 1] the constant would be |1 - t| + |t| > 1: such t is refused. The object id is the
+    first child's where t <= 1/2, the second's above.
+    """
+    kind: ClassVar[str] = "morph"
+    children: tuple[Node, ...] = param(doc="The two shapes: the first at t = 0, the second at "
+                                           "t = 1.", check=exactly_two)
+    t: float = param(0.5, "How far the first shape has turned into the second.",
+                     unit_interval)
 
 
 # --- Transforms ----------------------------------------------------------------------------

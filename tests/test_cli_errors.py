@@ -15,6 +15,8 @@ from scene_model.scenefile import scene_path
 
 TWO_OBJECTS = '[[objects]]\ntype = "plane"\n\n[[objects]]\ntype = "sphere"\n\n'
 UNION = '[[objects]]\ntype = "plane"\n\n[[objects]]\ntype = "union"\n[[objects.children]]\n'
+MORPH = ('[[objects]]\ntype = "plane"\n\n[[objects]]\ntype = "morph"\nt = {t}\n'
+         + '[[objects.children]]\ntype = "sphere"\n' * 2)
 
 # (id, file text, field path the message names, fragment of the problem)
 BAD_FILES = [
@@ -39,6 +41,21 @@ BAD_FILES = [
      "objects[2].material", "unknown material 'gold'"),
     ("colour_out_of_range", '[materials.default]\ncolor = [0.5, 1.2, 0.5]\n',
      "materials.default.color", "between 0 and 1"),
+    ("glass_index_below_air", '[materials.default]\ntransparency = 1.0\nior = 0.7\n',
+     "materials.default.ior", "must be >= 1 (got 0.7)"),
+    ("glass_transparency_above_one", '[materials.default]\ntransparency = 1.5\n',
+     "materials.default.transparency", "between 0 and 1"),
+    ("glass_negative_absorption", '[materials.default]\nabsorption = [0.1, -0.2, 0.0]\n',
+     "materials.default.absorption[1]", "must be >= 0 (got -0.2)"),
+    ("unknown_fresnel", '[render]\nfresnel = "snell"\n', "render.fresnel", "exact"),
+    ("texture_with_checker", '[materials.default]\nchecker = {}\ntexture = {}\n',
+     "materials.default.texture", "checker or texture, not both"),
+    ("unknown_texture_mapping", '[materials.default]\ntexture = { mapping = "spherical" }\n',
+     "materials.default.texture.mapping", "'triplanar', 'uv'"),
+    ("unknown_built_in_texture", '[materials.default]\ntexture = { image = "uv_gird" }\n',
+     "materials.default.texture.image", "no built-in image (built-in: uv_grid"),
+    ("texture_sharpness_below_1", '[materials.default]\ntexture = { sharpness = 0.5 }\n',
+     "materials.default.texture.sharpness", "must be >= 1"),
     ("spot_inner_not_below_outer",
      '[[lights]]\ntype = "spot"\ninner_angle = 45.0\nouter_angle = 30.0\n',
      "lights[0].inner_angle", "less than outer_angle"),
@@ -53,6 +70,15 @@ BAD_FILES = [
      "objects[0].scale", "must be positive"),
     ("nested_shorthand_short_position", UNION + 'type = "box"\nposition = [1.0, 2.0]\n',
      "objects[1].children[0].position", "3 components"),
+    ("morph_t_above_one", MORPH.format(t=1.5), "objects[1].t",
+     "must be between 0 and 1 (got 1.5)"),
+    ("morph_t_below_zero", MORPH.format(t=-0.25), "objects[1].t",
+     "must be between 0 and 1 (got -0.25)"),
+    ("morph_three_children", MORPH.format(t=0.5) + '[[objects.children]]\ntype = "box"\n',
+     "objects[1].children", "must have exactly 2 children (got 3)"),
+    ("morph_one_child", MORPH.format(t=0.5).replace('[[objects.children]]\ntype = "sphere"\n', "",
+                                                    1),
+     "objects[1].children", "must have exactly 2 children (got 1)"),
 ]
 
 

@@ -23,7 +23,7 @@ from reference_cpu.culling import ray_meets_sphere
 from reference_cpu.scene_sdf import build_scene_sdf
 from scene_model.bounds import bounding_sphere, enclosing_sphere
 from scene_model.shapes import (Box, CappedCylinder, Capsule, Cone, Disk, HexPrism, Intersection,
-                                Plane, Pyramid, Repeat, Rotate, RoundBox, Scale,
+                                Morph, Plane, Pyramid, Repeat, Rotate, RoundBox, Scale,
                                 SmoothIntersection, SmoothSubtraction, SmoothUnion, Sphere,
                                 Subtraction, Torus, Translate, Union)
 
@@ -128,6 +128,7 @@ def compound_nodes(children):
         st.builds(Union, some), st.builds(Intersection, some), st.builds(Subtraction, some),
         st.builds(SmoothUnion, some, blend), st.builds(SmoothIntersection, some, blend),
         st.builds(SmoothSubtraction, some, blend),
+        st.builds(Morph, st.tuples(children, children), st.floats(0.0, 1.0)),
         st.builds(Repeat, children, period, count),
     )
 
@@ -175,6 +176,8 @@ def test_bounding_sphere_holds_the_solid_of_any_bounded_tree(node, seed):
     SmoothIntersection((Sphere(0.8), Box((0.6, 0.6, 0.6))), 0.5),
     SmoothSubtraction((Sphere(0.8), Translate(Box((0.3, 0.3, 1.0)), (0.3, 0.0, 0.0))), 0.3),
     Repeat(Sphere(0.3), (1.0, 0.0, 1.5), (2, 0, 1)),
+    Morph((Translate(Sphere(0.6), (-0.2, 0, 0)), Translate(Box((0.3, 0.6, 0.3)), (0.4, 0, 0))),
+          0.35),
 ], ids=lambda n: n.kind)
 def test_bounding_sphere_holds_the_solid_of_each_node_type(node):
     inside, farthest = solid_points_outside(node, 33)

@@ -174,3 +174,38 @@ def test_a_physics_scene_animates_its_bodies_and_keyframes_through_the_same_path
     rows = table.read_text().splitlines()
     assert len(rows) == 1 + 3 * len(scene.bodies)
     assert math.isclose(float(rows[-1].split(",")[0]), 0.2, rel_tol=1e-9)
+
+
+# --- A morph's t, keyframed (scene_model/scenes/morph.toml) ---------------------------------
+
+def test_the_morph_scene_sweeps_the_middle_morphs_t_from_sphere_to_box_and_back():
+    """Its keys: t = 0, 1, 0 at 0, 2, 4 s, smoothstep, looping. The shorthand position puts
+    the morph under a translate, which the path objects[2].t looks through."""
+    scene = check_keyframes(load_scene("morph"))
+    for time, t in [(0.0, 0.0), (1.0, 0.5), (2.0, 1.0), (3.0, 0.5), (4.5, 5 / 32)]:
+        morph = scene_at_time(scene, time).objects[2].child
+        assert morph.kind == "morph" and morph.t == pytest.approx(t, abs=1e-12)
+
+
+def test_a_keyframed_morph_renders_as_the_scene_with_that_t_set():
+    """At 2 s the middle morph is the box: the frame equals the render of the file with
+    objects[2].t = 1 (bit for bit), and the middle object shows the box's id, not the
+    sphere's."""
+    scene = load_scene("morph")
+    frame = render_frames(scene, np.zeros((1, 0, 3)), 40, 30, "numpy", times=np.array([2.0]))[0]
+    still = render(load_scene("morph", ["objects[2].t=1.0"]), 40, 30, backend="numpy")
+    assert np.array_equal(frame, still.image("color"))
+    written = render(scene, 40, 30, backend="numpy")            # t = 0.5: the sphere's id
+    middle = written.object_id[:, 15:25]
+    assert 3 in middle and 4 not in middle
+    assert 4 in still.object_id[:, 15:25] and 3 not in still.object_id[:, 15:25]
+
+
+def test_a_morph_key_outside_0_to_1_is_refused_in_one_line():
+    scene = dataclasses.replace(load_scene("morph"), keyframes=(
+        Keyframes(field="objects[2].t", times=(0.0, 1.0), values=(0.0, 1.5)),))
+    with pytest.raises(SceneError) as error:
+        check_keyframes(scene)
+    message = str(error.value)
+    assert message.startswith("keyframes[0].values: key 1: ") and "\n" not in message
+    assert "between 0 and 1 (got 1.5)" in message

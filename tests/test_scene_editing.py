@@ -270,6 +270,19 @@ def test_moving_a_node_into_itself_or_its_descendant_is_refused(target):
     assert message == "objects[1].child: cannot move a node into itself or its own descendant"
 
 
+@pytest.mark.parametrize("edit", ["add", "duplicate", "delete", "move_out"])
+def test_a_morph_keeps_its_two_children_refusing_in_one_line(edit):
+    """A morph blends exactly two shapes: an edit that would leave it one or three is refused,
+    naming the morph."""
+    scene = Scene(objects=(Plane(), Sphere(0.5).morph(Box(), 0.3)))
+    call = {"add": lambda: add_object(scene, Sphere(), (1,)),
+            "duplicate": lambda: duplicate(scene, (1, 0)),
+            "delete": lambda: delete(scene, (1, 1)),
+            "move_out": lambda: reparent(scene, (1, 0), None)}[edit]
+    message = one_line_error(call)
+    assert message.startswith("objects[1].children: must have exactly 2 children (got ")
+
+
 def test_moving_into_a_transform_is_refused():
     message = one_line_error(reparent, tree_scene(), (0,), (2, 1))
     assert message.startswith("objects[2].children[1]: a translate holds exactly one child")
@@ -278,6 +291,10 @@ def test_moving_into_a_transform_is_refused():
 EDITS = st.lists(st.tuples(st.sampled_from(["add", "duplicate", "delete", "reparent"]),
                            st.sampled_from(sorted(node_kinds())), st.integers(0, 10 ** 6),
                            st.integers(0, 10 ** 6)), min_size=1, max_size=8)
+
+
+# What an edit that would give a morph other than two children is told (shapes.Morph).
+TWO_CHILDREN = "children: must have exactly 2 children (got "
 
 
 @settings(max_examples=40)
@@ -290,23 +307,37 @@ def test_random_edits_keep_counts_ids_and_the_file_round_trip(edits, tmp_path_fa
         before = count(scene.objects)
         if action == "add" or not paths:
             node = default_node(kind)
-            scene, path = add_object(scene, node, holders[a % len(holders)])
+            try:
+                scene, path = add_object(scene, node, holders[a % len(holders)])
+            except SceneError as err:                    # a third child for a morph
+                assert TWO_CHILDREN in str(err)
+                continue
             assert node_at(scene, path) == node and count(scene.objects) == before + count([node])
             continue
         path = paths[a % len(paths)]
         node = node_at(scene, path)
         if action == "duplicate":
-            scene, copy = duplicate(scene, path)
+            try:
+                scene, copy = duplicate(scene, path)
+            except SceneError as err:                    # a copy beside a morph's child
+                assert TWO_CHILDREN in str(err)
+                continue
             assert same_or_shifted(node_at(scene, copy), node)
             assert count(scene.objects) >= before + count([node])
         elif action == "delete":
-            scene = delete(scene, path)
+            try:
+                scene = delete(scene, path)
+            except SceneError as err:                    # a morph left with one child
+                assert TWO_CHILDREN in str(err)
+                continue
             assert count(scene.objects) <= before - count([node])
         else:
             target = holders[b % len(holders)]
             try:
                 scene, moved = reparent(scene, path, target)
             except SceneError as err:
+                if TWO_CHILDREN in str(err):             # into or out of a morph
+                    continue
                 assert "into itself or its own descendant" in str(err)
                 assert target[:1] == path[:1]
                 continue

@@ -37,11 +37,12 @@ def record_classes() -> list[type]:
 
 
 def make(cls, **values):
-    """``cls(**values)``, filling the fields that have no default (a node's children)."""
+    """``cls(**values)``, filling the fields that have no default (a node's children: two
+    spheres, which every operator takes, a morph exactly)."""
     for f in dataclasses.fields(cls):
         if f.name not in values and f.default is dataclasses.MISSING \
                 and f.default_factory is dataclasses.MISSING:
-            values[f.name] = (Sphere(),) if f.name == "children" else Sphere()
+            values[f.name] = (Sphere(), Sphere()) if f.name == "children" else Sphere()
     return cls(**values)
 
 
@@ -122,7 +123,8 @@ SIZE_FIELDS = {"Sphere.radius", "Box.half_size", "RoundBox.half_size", "RoundBox
                "Pyramid.base", "Pyramid.height", "Disk.radius", "Disk.thickness",
                "HexPrism.apothem", "HexPrism.half_length",
                "SmoothUnion.k", "SmoothIntersection.k", "SmoothSubtraction.k", "Scale.factor",
-               "Checker.scale", "Body.radius", "Body.half_size", "Body.half_length"}
+               "Checker.scale", "Texture.scale", "Body.radius", "Body.half_size",
+               "Body.half_length"}
 
 
 def fields_checked_by(*checks) -> dict[str, tuple]:

@@ -19,17 +19,19 @@ from marchlab import SceneError, load_scene, save_scene
 import marchlab
 from scene_model.bodies import Body, PhysicsSettings
 from scene_model.fields import DIRECTION, Each
-from scene_model.scene import (Camera, Checker, DirectionalLight, Fog, Material, PointLight,
-                               RenderSettings, Scene, SkyBackground, SolidBackground, SpotLight)
+from scene_model.scene import (Camera, Checker, CubeMapBackground, DirectionalLight,
+                               EquirectBackground, Fog, Material, PointLight, RenderSettings,
+                               Scene, SkyBackground, SolidBackground, SpotLight, StudioBackground,
+                               Texture)
 from scene_model.shapes import (Box, CappedCylinder, Capsule, Cone, Disk, HexPrism, Intersection,
-                                Plane, Pyramid, Repeat, Rotate, RoundBox, Scale,
+                                Morph, Plane, Pyramid, Repeat, Rotate, RoundBox, Scale,
                                 SmoothIntersection, SmoothSubtraction, SmoothUnion, Sphere,
                                 Subtraction, Torus, Translate, Union, primitives as primitives_of)
 
 
 BUNDLED = marchlab.bundled_scene_names()
 TOP_LEVEL_KEYS = {"description", "camera", "render", "materials", "lights", "objects", "physics",
-                  "bodies"}
+                  "bodies", "keyframes"}
 
 
 def round_trip(scene: Scene, tmp_path, name: str = "scene.toml") -> Scene:
@@ -184,13 +186,14 @@ def transform_chains(draw, inner):
 
 
 def trees(material):
-    """SDF trees mixing every primitive, CSG operator (plain and smooth) and transform."""
+    """SDF trees mixing every primitive, CSG operator (plain and smooth), morph and transform."""
     def extend(inner):
         kids = st.lists(inner, min_size=1, max_size=3).map(tuple)
         return st.one_of(
             st.builds(Union, kids), st.builds(Intersection, kids), st.builds(Subtraction, kids),
             st.builds(SmoothUnion, kids, SIZES), st.builds(SmoothIntersection, kids, SIZES),
             st.builds(SmoothSubtraction, kids, SIZES),
+            st.builds(Morph, st.tuples(inner, inner), UNIT),
             st.builds(Translate, inner, POINTS), st.builds(Rotate, inner, ANGLES),
             st.builds(Scale, inner, SIZES), st.builds(Repeat, inner, PERIODS, COUNTS),
             transform_chains(inner),
@@ -198,20 +201,44 @@ def trees(material):
     return st.recursive(primitive_nodes(material), extend, max_leaves=8)
 
 
-MATERIALS = st.builds(Material, COLORS, UNIT, UNIT, UNIT, numbers(Material, "shininess"), UNIT,
-                      st.none() | st.builds(Checker, COLORS, COLORS, SIZES))
+# Image files by absolute path: a relative one is read relative to the file it is saved in.
+IMAGE_FILES = st.text(max_size=8).filter(lambda t: "\x00" not in t).map(
+    lambda t: f"/images/{t}.png")
+SHADING = ["phong", "blinn_phong", "toon", "stripes", "normals", "depth", "steps"]
+# A material's pattern: none, a checker or a texture (of a file or a built-in image).
+TEXTURES = st.builds(Texture, IMAGE_FILES | st.just("uv_grid"),
+                     st.sampled_from(["triplanar", "uv"]), SIZES,
+                     numbers(Texture, "sharpness"), COLORS)
+PATTERNS = st.one_of(st.just({}), st.builds(lambda c: {"checker": c},
+                                            st.builds(Checker, COLORS, COLORS, SIZES)),
+                     st.builds(lambda t: {"texture": t}, TEXTURES))
+MATERIALS = st.builds(lambda pattern, **fields: Material(**pattern, **fields), PATTERNS,
+                      color=COLORS, ka=UNIT, kd=UNIT, ks=UNIT,
+                      shininess=numbers(Material, "shininess"), kr=UNIT,
+                      transparency=UNIT, ior=numbers(Material, "ior"),
+                      shading=st.none() | st.sampled_from(SHADING),
+                      absorption=vectors(Material, "absorption"))
 ATTENUATION = dict(constant=numbers(PointLight, "constant"),
                    linear=numbers(PointLight, "linear"),
                    quadratic=numbers(PointLight, "quadratic"))
 INTENSITIES = numbers(PointLight, "intensity")
+# A light's own ambient, diffuse and specular colours, each present or not.
+OWN_COLORS = dict(ambient=st.none() | COLORS, diffuse=st.none() | COLORS,
+                  specular=st.none() | COLORS)
 LIGHTS = st.one_of(
-    st.builds(PointLight, position=POINTS, color=COLORS, intensity=INTENSITIES, **ATTENUATION),
-    st.builds(DirectionalLight, DIRECTIONS, COLORS, INTENSITIES),
+    st.builds(PointLight, position=POINTS, color=COLORS, intensity=INTENSITIES, **ATTENUATION,
+              **OWN_COLORS),
+    st.builds(DirectionalLight, DIRECTIONS, COLORS, INTENSITIES, **OWN_COLORS),
     valid(SpotLight, position=POINTS, direction=DIRECTIONS, color=COLORS,
           intensity=INTENSITIES, inner_angle=numbers(SpotLight, "inner_angle"),
-          outer_angle=numbers(SpotLight, "outer_angle"), **ATTENUATION),
+          outer_angle=numbers(SpotLight, "outer_angle"), **ATTENUATION, **OWN_COLORS),
 )
-BACKGROUNDS = st.builds(SolidBackground, COLORS) | st.builds(SkyBackground, COLORS, COLORS)
+ENVIRONMENTS = dict(intensity=numbers(StudioBackground, "intensity"),
+                    rotation=numbers(StudioBackground, "rotation"))
+BACKGROUNDS = (st.builds(SolidBackground, COLORS) | st.builds(SkyBackground, COLORS, COLORS)
+               | st.builds(StudioBackground, integers(StudioBackground, "size"), **ENVIRONMENTS)
+               | st.builds(CubeMapBackground, st.tuples(*[IMAGE_FILES] * 6), **ENVIRONMENTS)
+               | st.builds(EquirectBackground, IMAGE_FILES, **ENVIRONMENTS))
 CAMERAS = valid(Camera, position=POINTS, look_at=POINTS, up=DIRECTIONS,
                 fov=numbers(Camera, "fov"))
 RENDER_SETTINGS = valid(
@@ -224,7 +251,8 @@ RENDER_SETTINGS = valid(
     penumbra_k=numbers(RenderSettings, "penumbra_k"),
     surface_offset=numbers(RenderSettings, "surface_offset"),
     reflection_depth=integers(RenderSettings, "reflection_depth"),
-    shading=st.sampled_from(["phong", "blinn_phong", "toon", "normals", "depth", "steps"]),
+    fresnel=st.sampled_from(["exact", "schlick"]),
+    shading=st.sampled_from(SHADING),
     toon_bands=integers(RenderSettings, "toon_bands"), ambient=COLORS,
     gamma=numbers(RenderSettings, "gamma"),
     fog=st.builds(Fog, COLORS, numbers(Fog, "density")), background=BACKGROUNDS)

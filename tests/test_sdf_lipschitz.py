@@ -2,8 +2,10 @@
 
 Sphere tracing steps a ray forward by f(p); that is safe only if no surface is nearer than f(p),
 which for an exact distance follows from |f(p) - f(q)| <= |p - q|. Every exact primitive, the
-hard CSG operators over them (min and max of 1-Lipschitz functions are 1-Lipschitz) and the rigid
-and uniform-scale transforms must keep this property.
+hard CSG operators over them (min and max of 1-Lipschitz functions are 1-Lipschitz), the morph
+(a mix with weights 1 - t and t, both >= 0 and summing to 1) and the rigid and uniform-scale
+transforms must keep this property. (The morph is not an exact distance, only a bound; what
+it promises beyond this one is tested in test_sdf_morph.py.)
 
 The smooth operators are left out on purpose. Inside the blend they are not the distance to the
 blended surface, only a bound on it, and the toolkit promises no more than that (sdf.py says
@@ -207,6 +209,13 @@ def test_subtraction_of_exact_primitives_is_1_lipschitz(a, b, offset, pairs):
 def test_csg_tree_built_with_operators_is_1_lipschitz(a, b, c, offset, pairs):
     """(a | b.at(offset)) & c - b: the same operators through scene_model.shapes and the scene."""
     assert_1_lipschitz(scene(((a | b.at(*offset)) & c) - b), *pairs)
+
+
+# --- Morph: |(1 - t)(a(p) - a(q)) + t (b(p) - b(q))| <= (1 - t)|p - q| + t |p - q| --------------
+
+@given(a=primitives(), b=primitives(), offset=point, t=st.floats(0, 1), pairs=point_pairs())
+def test_morph_of_exact_primitives_is_1_lipschitz(a, b, offset, t, pairs):
+    assert_1_lipschitz(scene(a.morph(b.at(*offset), t)), *pairs)
 
 
 # --- Transforms: rigid motions and uniform scale keep the Lipschitz constant ---------------------

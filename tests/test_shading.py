@@ -320,3 +320,68 @@ def test_toon_render_quantises_diffuse_and_specular_into_levels():
     assert clear.sum() > WIDTH * HEIGHT // 2
     assert len(np.unique(np.floor(n_dot_l[clear] * bands))) >= 2   # several diffuse bands seen
     np.testing.assert_allclose(frame.color[clear], expected[clear], rtol=0, atol=TOLERANCE)
+
+
+# --- Lights with their own ambient, diffuse and specular colours -----------------------------
+
+OWN = dataclasses.replace(POINT, ambient=(0.1, 0.05, 0.0), diffuse=(0.3, 0.6, 0.2),
+                          specular=(0.1, 0.2, 0.9))
+
+
+def test_a_light_with_its_own_colours_matches_the_terms_worked_out_by_hand():
+    """ambient x ka albedo x attenuation + diffuse x kd max(N.L, 0) albedo x attenuation
+    + specular x ks max(R.V, 0)^alpha x attenuation, each colour times intensity."""
+    frame = marchlab.render(with_lights(OWN), WIDTH, HEIGHT)
+    p, v = plane_hits(SCENE)
+    to_light, white = point_light_arriving(dataclasses.replace(OWN, color=(1.0, 1.0, 1.0)), p)
+    falloff = white / OWN.intensity
+    lit_diffuse = phong(p, v, [(to_light, falloff * np.multiply(OWN.diffuse, OWN.intensity))],
+                        specular_shape=lambda s: 0 * s, diffuse_shape=lambda d: d)
+    lit_specular = phong(p, v, [(to_light, falloff * np.multiply(OWN.specular, OWN.intensity))],
+                         diffuse_shape=lambda d: 0 * d, specular_shape=lambda s: s)
+    base = KA * ALBEDO * AMBIENT
+    expected = (lit_diffuse + lit_specular - base
+                + KA * ALBEDO * np.multiply(OWN.ambient, OWN.intensity) * falloff)
+    assert_unclipped(expected)
+    np.testing.assert_allclose(frame.color, expected, rtol=0, atol=TOLERANCE)
+
+
+def test_a_light_whose_own_colours_are_its_colour_renders_as_the_plain_light():
+    same = dataclasses.replace(POINT, diffuse=POINT.color, specular=POINT.color)
+    a = marchlab.render(with_lights(POINT), WIDTH, HEIGHT, precision="float64")
+    b = marchlab.render(with_lights(same), WIDTH, HEIGHT, precision="float64")
+    np.testing.assert_allclose(b.color, a.color, rtol=0, atol=1e-7)     # float32 colours
+
+
+def test_a_lights_ambient_term_lights_points_in_its_shadow():
+    """A ball between the light and the plane: in its shadow the diffuse and specular terms
+    vanish, the light's ambient term does not."""
+    from scene_model.builder import sphere
+    sun = DirectionalLight(direction=(1.0, 0.0, -1.0), color=(0.5, 0.5, 0.5),
+                           ambient=(0.2, 0.1, 0.05))
+    scene = dataclasses.replace(with_lights(sun, shadows="hard"),
+                                objects=SCENE.objects + (sphere(0.4, material="m").at(0, 0, 1.0),))
+    frame = marchlab.render(scene, 41, 31, precision="float64")
+    shadowed = frame.hit & (frame.object_id == 0) & (frame.color[..., 0] < 0.1)
+    assert shadowed.sum() > 20
+    expected = KA * ALBEDO * (AMBIENT + np.array(sun.ambient))
+    np.testing.assert_allclose(frame.color[shadowed], np.broadcast_to(     # float32 colours
+        expected, (shadowed.sum(), 3)), rtol=0, atol=1e-7)
+
+
+def test_stripes_follow_the_sawtooth_of_the_diffuse_and_specular_terms():
+    frame = marchlab.render(with_lights(POINT, shading="stripes", toon_bands=3), WIDTH, HEIGHT)
+    p, v = plane_hits(SCENE)
+    band = lambda x: shading.stripes_band(np.asarray(x), 3)
+    expected = phong(p, v, [point_light_arriving(POINT, p)], diffuse_shape=band,
+                     specular_shape=band)
+    np.testing.assert_allclose(frame.color, expected, rtol=0, atol=TOLERANCE)
+
+
+def test_stripes_band_is_a_continuous_sawtooth_of_n_teeth():
+    x = np.linspace(0, 1, 100_001)
+    y = shading.stripes_band(x, 4)
+    assert np.abs(np.diff(y)).max() < 1e-3            # no jump anywhere
+    teeth = np.sum((y[1:] < 0.05) & (y[:-1] >= 0.05))  # each tooth falls back once
+    assert teeth == 4
+    np.testing.assert_allclose(y[x < 0.2], 4 * x[x < 0.2], atol=1e-12)   # rises as 4 x

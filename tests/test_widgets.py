@@ -125,6 +125,23 @@ def test_choice_and_colour_controls_set_their_fields(view):
     assert view.viewer.scene.materials["red"].color == (0.0, 1.0, 0.0)
 
 
+def test_glass_controls_slide_the_material_and_the_tree_and_a_share_spans_0_to_1():
+    """Lesson 08's sliders: a material's index and transparency, the tree's depth and the
+    Fresnel model; a field between 0 and 1 (transparency, kr) slides over exactly that."""
+    need_backend("gpu")
+    from marchlab.widgets import View
+    view = View("glass", controls=["materials.clear.ior", "materials.clear.transparency",
+                                   "render.reflection_depth", "render.fresnel",
+                                   "materials.mirror.kr"], size=SIZE, markers=False)
+    ior, transparency, depth, fresnel, kr = view.controls[:5]    # then the shading mode
+    assert [(c.min, c.max) for c in (ior, transparency, kr)] == [(1.0, 4.0), (0.0, 1.0),
+                                                                 (0.0, 1.0)]
+    ior.value, transparency.value, depth.value, fresnel.value = 1.0, 0.5, 2, "schlick"
+    scene = view.viewer.scene
+    assert (scene.materials["clear"].ior, scene.materials["clear"].transparency) == (1.0, 0.5)
+    assert (scene.render.reflection_depth, scene.render.fresnel) == (2, "schlick")
+
+
 def test_a_click_selects_the_object_under_the_cursor(view):
     frame = render(load_scene("classroom"), *SIZE, backend="gpu")
     view.image()
@@ -159,7 +176,8 @@ def test_check_against_the_reference_passes_every_gate_and_shows_the_pictures(vi
 
 def test_lights_are_marked_and_a_drag_from_a_mark_moves_the_light():
     need_backend("gpu")
-    from marchlab.widgets import MARKER_COLOR, View
+    from marchlab.light_marks import MARKER_COLOR
+    from marchlab.widgets import View
     view = View("lights", size=(192, 144))
     index, x, y = next((i, x, y) for i, x, y in view.viewer.light_markers()
                        if 0 <= x < 192 and 0 <= y < 144)        # a light inside the view

@@ -42,7 +42,8 @@ real cone_march(vec3 origin, vec3 axis, real tan_half)
 
 // The start of every ray of tile (tx, ty) (tiles counted from the top-left; those at the
 // right and bottom edges may be smaller): the cone from the eye through the tile's centre,
-// wide enough to hold the rays through its four corners, marched.
+// wide enough to hold the rays through its four corners (so, being convex, the ray through
+// every point of the tile, anti-aliasing samples included), marched.
 real tile_start(real tx, real ty)
 {
     real x0 = tx * PREPASS_TILE;

@@ -40,7 +40,9 @@ __kernel void render(PARAMETERS,
     }
     real x = (real)(column) + 0.5;
     real y = (real)(row) + 0.5;
+{% if not samples %}
     vec3 direction = camera_ray(x, y);
+{% endif %}
 {% if prepass %}
     int tile = (int)(PREPASS_TILE);
     int columns = ((int)(IMAGE_WIDTH) + tile - 1) / tile;
@@ -48,7 +50,11 @@ __kernel void render(PARAMETERS,
 {% else %}
     real start = 0.0;
 {% endif %}
+{% if samples %}
+    Pixel px = supersample(x, y, start);      // every ray of the pixel (anti-aliasing)
+{% else %}
     Pixel px = trace(CAMERA_POSITION, direction, start);
+{% endif %}
 
     Hit h = px.primary;
     int pixel = row * (int)(IMAGE_WIDTH) + column;

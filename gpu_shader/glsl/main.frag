@@ -21,13 +21,19 @@ void main()
     // reading it back needs no flip.
     real x = gl_FragCoord.x;
     real y = gl_FragCoord.y;
+{% if not samples %}
     vec3 direction = camera_ray(x, y);
+{% endif %}
 {% if prepass %}
     real start = texelFetch(cone_starts, ivec2(gl_FragCoord.xy) / int(PREPASS_TILE), 0).x;
 {% else %}
     real start = 0.0;
 {% endif %}
+{% if samples %}
+    Pixel px = supersample(x, y, start);      // every ray of the pixel (anti-aliasing)
+{% else %}
     Pixel px = trace(CAMERA_POSITION, direction, start);
+{% endif %}
 
     Hit h = px.primary;
     out_color = vec4(clamp(px.color, 0.0, 1.0), float(h.hit));

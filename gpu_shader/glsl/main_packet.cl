@@ -47,7 +47,9 @@ __kernel void render(PARAMETERS,
     ipacket inside = column < (int)(IMAGE_WIDTH);
     packet x = convert_packet(column) + 0.5;
     packet y = (real)(row) + 0.5;
+{% if not samples %}
     vec3p direction = camera_ray(x, y);
+{% endif %}
 {% if prepass %}
     int tile = (int)(PREPASS_TILE);
     int columns = ((int)(IMAGE_WIDTH) + tile - 1) / tile;
@@ -58,7 +60,11 @@ __kernel void render(PARAMETERS,
 {% else %}
     packet start = 0.0;
 {% endif %}
+{% if samples %}
+    Pixel px = supersample(x, y, start, inside);      // every ray of the pixel (anti-aliasing)
+{% else %}
     Pixel px = trace(splat3(CAMERA_POSITION), direction, start, inside);
+{% endif %}
 
     Hit h = px.primary;
     vec3p color = clamp(px.color, 0.0, 1.0);

@@ -191,6 +191,15 @@ real op_smooth_intersection(real d1, real d2, real k)
     return d2 + (d1 - d2) * h + k * h * (1.0 - h);
 }
 
+// Shape 1 turning into shape 2 as t goes from 0 to 1: mix(d1, d2, t), written out so that
+// t = 0 and t = 1 give d1 and d2 exactly and no backend fuses it into one FMA. For t in
+// [0, 1] a 1-Lipschitz bound, not an exact distance (reference_cpu/sdf.py, op_morph).
+real op_morph(real d1, real d2, real t)
+{
+    precise real d = (1.0 - t) * d1 + t * d2;
+    return d;
+}
+
 // --- Moving the query point (transforms) -----------------------------------------------
 
 vec3 op_translate(vec3 p, vec3 offset)

@@ -35,6 +35,15 @@ real toon_band(real x, real bands)
     return min((level + step) / (bands - 1.0), 1.0);
 }
 
+// A sawtooth of x in [0, 1] with `stripes` teeth, u = fract(stripes x); each tooth falls
+// back to 0 over its last tenth by a smoothstep, so the colour stays continuous.
+real stripes_band(real x, real stripes)
+{
+    real q = x * stripes;
+    real u = q - floor(q);
+    return u * (1.0 - smoothstep(0.9, 1.0, u));
+}
+
 // 0 where floor(x/s) + floor(z/s) is even, 1 where it is odd.
 real checker_parity(vec3 p, real scale)
 {

@@ -277,12 +277,15 @@ vec3 heat(real x)
 
 // A lit pixel: shading, fog and Whitted's mirror reflections. Each bounce adds its shaded
 // colour weighted by the product of the kr seen so far; a ray that hits nothing adds the
-// background. Without a mirror (or with REFLECTION_DEPTH 0) the loop stops after the first
-// bounce, where colour and path are those of a loopless pixel exactly (0 + 1 x = x).
+// background; a weight of at most MIN_RAY_WEIGHT ends the chain. The path label is the sum
+// of the bounces' labels whose weight is more than LABEL_WEIGHT (glsl/pipeline/trace.glsl).
+// Without a mirror (or with REFLECTION_DEPTH 0) the loop stops after the first bounce, where
+// colour and path are those of a loopless pixel exactly (0 + 1 x = x).
 vec4 lit_pixel_color(vec3 origin, vec3 direction, Hit h, vec3 n, int id)
 {
     vec3 color = vec3(0.0);
     uint path = 0u;
+    uint label = 0u;
     real weight = 1.0;
     vec3 o = origin;
     vec3 d = direction;
@@ -292,7 +295,10 @@ vec4 lit_pixel_color(vec3 origin, vec3 direction, Hit h, vec3 n, int id)
         }
         if (h.hit == 0) {
             color = color + weight * background(d);
-            path = path_step(path, -1, 0u);
+            label = path_step(label, -1, 0u);
+            if (weight > LABEL_WEIGHT) {
+                path = (path + label) & 0xFFFFFFu;
+            }
             break;
         }
         precise vec3 p = o + h.t * d;
@@ -306,14 +312,18 @@ vec4 lit_pixel_color(vec3 origin, vec3 direction, Hit h, vec3 n, int id)
             shaded = apply_fog(shaded, h.t, FOG_COLOR, FOG_DENSITY);
         }
         color = color + weight * shaded;
-        path = path_step(path, id, uint(lit.w));
+        label = path_step(label, id, uint(lit.w));
+        if (weight > LABEL_WEIGHT) {
+            path = (path + label) & 0xFFFFFFu;
+        }
         weight = weight * MATERIAL(id, 1).w;
-        if (bounce == REFLECTION_DEPTH || !(weight > 0.0)) {
+        if (bounce == REFLECTION_DEPTH || !(weight > MIN_RAY_WEIGHT)) {
             break;
         }
-        // Continue just off the mirror, in the mirrored direction.
-        o = p + SURFACE_OFFSET * n;
-        d = reflect(d, n);
+        // Continue just off the mirror on the ray's side, in the mirrored direction.
+        vec3 n_facing = dot(d, n) < 0.0 ? n : -n;
+        o = p + SURFACE_OFFSET * n_facing;
+        d = reflect(d, n_facing);
     }
     return vec4(color, float(path));
 }

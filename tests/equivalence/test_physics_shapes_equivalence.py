@@ -101,6 +101,11 @@ CASES = {
     "pegs": (scene_of([plane(), PEGS], [Body(position=(x, 1.5, z), radius=0.05, restitution=0.5)
                                         for x, z in ((-0.58, -0.6), (-0.29, -0.2), (0.02, 0.2),
                                                      (0.33, 0.6))]), 2.0),
+    # a ball dropped onto a morph half way from a sphere to a box (a bound, not an exact
+    # distance: the contacts still find its surface), off centre so that it rolls away
+    "ball_on_morph": (scene_of([sphere(0.5).morph(box(0.45), 0.5).at(0, 0.5, 0)],
+                               [Body(position=(0.15, 1.5, 0.1), radius=R, restitution=0.5)]),
+                      1.5),
 }
 
 
@@ -124,7 +129,7 @@ def test_gpu_positions_match_cpu_within_tolerance_at_every_step(case, capsys):
 
 
 # The cases with impacts; the others roll or rest, and rolling or resting records no event.
-IMPACTS = ["ball_on_box", "cavity_corner_struck", "fast_ball_thin_wall", "pegs"]
+IMPACTS = ["ball_on_box", "cavity_corner_struck", "fast_ball_thin_wall", "pegs", "ball_on_morph"]
 
 
 @pytest.mark.parametrize("case", IMPACTS)
@@ -217,7 +222,8 @@ LINED_BOWL = Scene(materials={"default": Material(), "rubber": RUBBER},
                    physics=PhysicsSettings(solver="simultaneous", plane_restitution=0.25))
 SDF_SCENES = {"ball_on_box": CASES["ball_on_box"][0],
               "incline_30_degrees": CASES["incline_30_degrees"][0],
-              "pegs": CASES["pegs"][0], "lined_bowl": LINED_BOWL}
+              "pegs": CASES["pegs"][0], "lined_bowl": LINED_BOWL,
+              "ball_on_morph": CASES["ball_on_morph"][0]}
 
 
 @pytest.mark.parametrize("case", list(SDF_SCENES))

@@ -75,6 +75,14 @@ FEATURE_SWITCHES = {
     "checker": (["materials.default.checker.scale=0.5"],
                 {"checker", "checker_parity"}, set(),
                 {"checker"}, set(), None),
+    # A texture brings the bilinear filter and its mapping's functions.
+    "triplanar texture": (["materials.default.texture.mapping=\"triplanar\""],
+                          {"texture_bilinear", "texture_repeat", "cube_face_coordinates",
+                           "triplanar_weights", "texture_triplanar"}, set(),
+                          {"texture_bilinear", "texture:triplanar"}, set(), None),
+    "uv texture": (["materials.default.texture.mapping=\"uv\""],
+                   {"texture_bilinear", "equirect_uv", "sphere_uv", "texture_sphere"}, set(),
+                   {"texture_bilinear", "texture:sphere"}, set(), None),
     # A spot light is a point light limited to a cone, so it brings light_point along.
     "spot light": (["lights[0].type=spot"],
                    {"light_spot", "light_point", "attenuation", "spot_cone"},
@@ -179,6 +187,15 @@ def test_changing_a_number_changes_parameters_not_source(overrides):
     changed = generate(load_scene("classroom", overrides), WIDTH, HEIGHT)
     assert changed.source == plain.source
     assert changed.parameters.shape == plain.parameters.shape
+    assert (changed.parameters != plain.parameters).any()
+
+
+def test_a_morphs_t_across_one_half_changes_parameters_not_source():
+    """The morph's t, and with it which child's id it shows, is a parameter: an animation
+    that sweeps t compiles once."""
+    plain = generate(load_scene("morph"), WIDTH, HEIGHT)
+    changed = generate(load_scene("morph", ["objects[2].t=0.75"]), WIDTH, HEIGHT)
+    assert changed.source == plain.source
     assert (changed.parameters != plain.parameters).any()
 
 
@@ -352,7 +369,8 @@ def test_hard_shadow_rays_are_paired_where_the_march_allows_and_nothing_unused_i
 
 # --- path labels, only for the equivalence suite --------------------------------------------
 
-PATH_LABEL_CODE = {"path_step", "path", "features", "surface_checker_parity"}
+PATH_LABEL_CODE = {"path_step", "path", "features", "surface_checker_parity",
+                   "surface_texture_face"}
 
 
 def code_words(source: str) -> set[str]:

@@ -175,7 +175,8 @@ def test_uber_parameter_block_fits_the_smallest_uniform_block_gl_allows():
 
 # --- what it cannot hold: one line naming it ---------------------------------------------------
 
-@pytest.mark.parametrize("scene_name, node", [("csg", "subtraction"), ("repetition", "repeat")])
+@pytest.mark.parametrize("scene_name, node", [("csg", "subtraction"), ("repetition", "repeat"),
+                                              ("morph", "morph")])
 def test_unsupported_node_gives_a_one_line_error_naming_it(scene_name, node):
     with pytest.raises(MarchlabError) as caught:
         uber_program(load_scene(scene_name), 32, 24)
@@ -193,6 +194,13 @@ def test_relaxed_marching_gives_a_one_line_error():
 def test_the_cone_prepass_gives_a_one_line_error():
     scene = with_settings(load_scene("classroom"), prepass="cone")
     with pytest.raises(MarchlabError, match="prepass = 'cone'") as caught:
+        uber_program(scene, 32, 24)
+    assert "\n" not in str(caught.value)
+
+
+def test_a_textured_material_gives_a_one_line_error():
+    scene = load_scene("classroom", ['materials.red.texture.image="uv_grid"'])
+    with pytest.raises(MarchlabError, match="has a texture") as caught:
         uber_program(scene, 32, 24)
     assert "\n" not in str(caught.value)
 

@@ -106,7 +106,8 @@ def test_every_backend_labels_acne_and_self_reflection_exactly_where_predicted(r
                                                                               offset):
     """The path label of a floor pixel records, at each bounce, the object hit and whether
     the light's shadow ray was blocked: 64 + blocked for the first bounce, then the sky
-    (id -1) or the floor again with its own blocked bit."""
+    (id -1) or the floor again with its own blocked bit, folded into the first; the pixel's
+    label is the sum of the two bounces' (reference_cpu/render.py, Tracer.lit_color)."""
     scene = mirror_floor_scene(offset)
     frame = renderer.draw(scene, 48, 36)
     origin, directions = pixel_rays(scene, 48, 36)
@@ -117,9 +118,10 @@ def test_every_backend_labels_acne_and_self_reflection_exactly_where_predicted(r
     first = p_y + offset * n_y                   # origin height of both secondary rays
     second = p_y + 2 * offset * n_y              # shadow ray of the reflected point
     acne, self_hit, acne_again = first < EPSILON, first < EPSILON, second < EPSILON
-    label = 64 + acne.astype(np.uint32)
-    label = np.where(self_hit, (label * 1009 + 1) * 64 + acne_again, label * 1009 * 64)
-    label &= 0xFFFFFF
+    first_bounce = 64 + acne.astype(np.uint32)
+    second_bounce = np.where(self_hit, (first_bounce * 1009 + 1) * 64 + acne_again,
+                             first_bounce * 1009 * 64) & 0xFFFFFF
+    label = (first_bounce + second_bounce) & 0xFFFFFF
     decided = (np.abs(first - EPSILON) > ROUNDING) & (np.abs(second - EPSILON) > ROUNDING)
     assert decided.mean() > 0.97
     np.testing.assert_array_equal(frame.path[hit][decided], label[decided])

@@ -27,8 +27,9 @@ import functools
 
 import numpy as np
 import pytest
+from sdf_reference import first_roots as roots_along_rays
 
-from reference_cpu.march import columns, march
+from reference_cpu.march import march
 from reference_cpu.scene_sdf import build_scene_sdf
 from scene_model.builder import Camera, PointLight, RenderSettings, Scene, box, sphere
 
@@ -75,25 +76,12 @@ def first_roots(k, origins_key, directions_key):
     origins = np.frombuffer(origins_key).reshape(-1, 3)
     directions = np.frombuffer(directions_key).reshape(-1, 3)
     f = build_scene_sdf([blob(k)])
-    t = np.linspace(0, REACH, SAMPLES + 1)
-    values = np.empty((len(origins), len(t)))
-    for chunk in np.array_split(np.arange(len(t)), 40):      # 100 samples of every ray
-        points = origins[:, None, :] + t[None, chunk, None] * directions[:, None, :]
-        values[:, chunk] = f(columns(points.reshape(-1, 3)))[0].reshape(len(origins), -1)
-    inside = values <= 0
-    has_root = inside.any(axis=1)
-    first = np.argmax(inside, axis=1)
-    lo, hi = t[np.maximum(first - 1, 0)], t[first]
-    for _ in range(50):
-        mid = (lo + hi) / 2
-        outside = f(origins + mid[:, None] * directions)[0] > 0
-        lo, hi = np.where(outside, mid, lo), np.where(outside, hi, mid)
-    root = np.where(has_root, hi, np.inf)
+    root, lowest = roots_along_rays(f, origins, directions, REACH, SAMPLES)
     # |f'| at the root, by a central difference along the ray.
-    r = np.where(has_root, root, 0.0)[:, None]
+    r = np.where(np.isfinite(root), root, 0.0)[:, None]
     slope = np.abs(f(origins + (r + 1e-7) * directions)[0]
                    - f(origins + (r - 1e-7) * directions)[0]) / 2e-7
-    return root, values.min(axis=1), slope
+    return root, lowest, slope
 
 
 def check_against_roots(k, origins, directions, t, hit, slack):

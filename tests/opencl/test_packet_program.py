@@ -53,7 +53,9 @@ def test_packet_program_renders_the_one_ray_frame(opencl_device, name, scene, si
     width, height = size
     packets = opencl.render(scene, width, height, precision, path_labels=True)
     one_ray = opencl.render(scene, width, height, precision, packets=False, path_labels=True)
-    assert packets.hit.any() and not packets.hit.all() or name.startswith("scene:")
+    # (a feature case shows some background, but not from inside a glass block)
+    assert (packets.hit.any() and not packets.hit.all() or name.startswith("scene:")
+            or name.endswith("camera_inside"))
     assert packets.path is not None
     assert_same_frame(packets, one_ray, f"{name} {precision}")
 

@@ -238,6 +238,13 @@ def smooth_case(rng):
     return [d1[:, None], d2[:, None], k]
 
 
+def morph_case(rng):
+    """t per packet: random in [0, 1], the ends 0 and 1, and 1/2 (the id rule's switch)."""
+    t = per_packet(mix(rng, rng.uniform(0.0, 1.0, BLOCKS), 0.0, 1.0, 0.5))
+    d1, d2 = distances(rng)
+    return [d1[:, None], d2[:, None], t]
+
+
 def translate_case(rng):
     offset = per_packet(mix(rng, rng.normal(size=(BLOCKS, 3)), 0.0))
     p = anywhere(rng)
@@ -369,6 +376,7 @@ CASES = [
       for name in ("op_union", "op_intersection", "op_subtraction")],
     *[Case("sdf", name, ("packet", "packet", "real"), "packet", smooth_case)
       for name in ("op_smooth_union", "op_smooth_subtraction", "op_smooth_intersection")],
+    Case("sdf", "op_morph", ("packet", "packet", "real"), "packet", morph_case),
     Case("sdf", "op_translate", ("vec3p", "vec3"), "vec3p", translate_case),
     Case("sdf", "op_rotate", ("vec3p", "vec3", "vec3", "vec3"), "vec3p", rotate_case),
     Case("sdf", "op_scale", ("vec3p", "real"), "vec3p", scale_case),

@@ -34,7 +34,7 @@ NEAR = (-7, -3)              # `near`: a relative 1e-7..1e-3 off
 
 # the scalar libraries whose packet forms are checked here (those of march, relaxed and
 # shadow_pair by test_packet_march.py)
-CHECKED = ["lights", "shading"]
+CHECKED = ["lights", "shading", "glass"]
 
 
 # --- Inputs --------------------------------------------------------------------------------
@@ -80,6 +80,45 @@ def toon_case(rng):
     edges = mix(rng, k / bands, (k + 0.9) / bands, (k + 1.0) / bands)   # q - level = 0, 0.9, 1
     x = mix(rng, rng.uniform(0, 1, (ROWS, 1)), edges, near(rng, edges, NEAR), 0.0, 1.0)
     return [np.clip(x, 0.0, 1.0), bands]
+
+
+def interface_case(rng):
+    """cos_i, eta, cos_t at a glass surface, entering and leaving: head-on, grazing (cos_i
+    down to 0), at and near the critical angle (k = 0), and total reflection (cos_t 0)."""
+    eta = mix(rng, rng.choice([1 / 1.5, 1.5, 1 / 1.33, 1.33, 1.0, 1 / 2.4], (ROWS, 1)),
+              1 / 1.5, 1.5)
+    critical = np.sqrt(np.clip(1 - 1 / eta ** 2, 0, 1))     # cos i where k = 0 (eta > 1)
+    cos_i = mix(rng, rng.uniform(0, 1, (ROWS, 1)), critical, near(rng, critical, NEAR),
+                1.0, 1e-6, 0.0)
+    k = 1 - eta * eta * (1 - cos_i * cos_i)
+    return cos_i, eta, np.sqrt(np.maximum(k, 0))
+
+
+def refract_k_case(rng):
+    cos_i, eta, _ = interface_case(rng)
+    return [cos_i, eta]
+
+
+def refract_direction_case(rng):
+    cos_i, eta, cos_t = interface_case(rng)
+    n = units(rng, ROWS)
+    tangent = normalised(np.cross(n, units(rng, ROWS)))
+    d = -cos_i * n + np.sqrt(1 - cos_i ** 2) * tangent       # meets n at cos_i
+    return [d, n, cos_i, eta, cos_t]
+
+
+def fresnel_case(rng):
+    cos_i, eta, cos_t = interface_case(rng)
+    n1 = mix(rng, rng.uniform(1, 2.5, (ROWS, 1)), 1.0, 1.5)
+    # the 0 / 0 of cos_i = cos_t = 0 is the caller's to avoid (total reflection: F = 1)
+    cos_i = np.where((cos_i == 0) & (cos_t == 0), 1e-3, cos_i)
+    return [cos_i, cos_t, n1, n1 / eta]
+
+
+def beer_lambert_case(rng):
+    absorption = mix(rng, rng.uniform(0, 5, (ROWS, 3)), 0.0, rng.uniform(0, 1e3, (ROWS, 3)))
+    distance = mix(rng, rng.uniform(0, 3, (ROWS, 1)), 0.0, MAX_DISTANCE)
+    return [absorption, distance]
 
 
 def checker_points(rng):
@@ -211,6 +250,7 @@ CASES = [
     Case("shading", "specular_blinn_phong", ("vec3p", "vec3p", "vec3p", "packet"), "packet",
          specular_case),
     Case("shading", "toon_band", ("packet", "real"), "packet", toon_case),
+    Case("shading", "stripes_band", ("packet", "real"), "packet", toon_case),
     Case("shading", "checker_parity", ("vec3p", "packet"), "packet", checker_parity_case),
     Case("shading", "checker", ("vec3p", "vec3p", "vec3p", "packet"), "vec3p", checker_case),
     Case("shading", "path_step", ("upacket", "ipacket", "upacket"), "upacket", path_case),
@@ -220,6 +260,14 @@ CASES = [
     Case("shading", "background_solid", ("vec3p", "vec3"), "vec3p", background_solid_case),
     Case("shading", "background_sky", ("vec3p", "vec3", "vec3"), "vec3p",
          background_sky_case),
+    Case("glass", "refract_k", ("packet", "packet"), "packet", refract_k_case),
+    Case("glass", "refract_direction", ("vec3p", "vec3p", "packet", "packet", "packet"),
+         "vec3p", refract_direction_case),
+    Case("glass", "fresnel_exact", ("packet", "packet", "packet", "packet"), "packet",
+         fresnel_case),
+    Case("glass", "fresnel_schlick", ("packet", "packet", "packet", "packet"), "packet",
+         fresnel_case),
+    Case("glass", "beer_lambert", ("vec3p", "packet"), "vec3p", beer_lambert_case),
 ]
 CASE_IDS = [case.name for case in CASES]
 
@@ -248,7 +296,7 @@ def test_every_function_of_the_library_is_checked_here(library):
 # Both are far below the colour gate the equivalence suite applies (1e-3 in float32), and
 # neither touches what must agree exactly (hit masks, depths, path labels, shadow states).
 POW = {"specular_phong", "specular_blinn_phong"}
-EXP = {"apply_fog"}
+EXP = {"apply_fog", "beer_lambert"}
 
 
 def assert_pow_close(got, expected, what):

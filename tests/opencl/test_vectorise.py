@@ -288,12 +288,17 @@ def test_a_call_of_an_unknown_function_is_an_error_naming_it():
         vectorise(program, {}, {"f": (True,)})
 
 
-LIBRARIES = ["sdf", "culling", "camera", "march", "lights", "shading", "shadow_pair"]
+LIBRARIES = ["sdf", "culling", "camera", "march", "lights", "shading", "shadow_pair", "texture",
+             "environment"]
 
 
-@pytest.mark.parametrize("name", LIBRARIES + ["relaxed", "classroom"])
+@pytest.mark.parametrize("name", LIBRARIES + ["relaxed", "classroom", "environment-scene",
+                                               "textures-scene"])
 def test_a_program_written_back_reads_back_the_same(name):
-    if name == "classroom":
+    if name.endswith("-scene"):           # their texture atlas read through TEXEL
+        scalar = scalar_program(marchlab.load_scene(name[:-len("-scene")]), 64, 48)
+        text = scalar.defines + scalar.functions
+    elif name == "classroom":
         scalar = scalar_program(rendered_scene(marchlab.load_scene(name)), 64, 48)
         text = scalar.defines + scalar.functions
     else:

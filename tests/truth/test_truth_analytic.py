@@ -154,6 +154,15 @@ def test_unsupported_node_is_named_with_its_path():
                                  "boxes and planes); use --method embree")
 
 
+def test_a_morph_is_refused_by_the_analytic_method_naming_it():
+    scene = Scene(objects=(plane(), sphere().morph(box(), 0.5).at(0, 1, 0)))
+    with pytest.raises(SceneError) as caught:
+        ground_truth(scene, 4, 3)
+    assert str(caught.value) == ("objects[1]: 'morph' has no analytic intersection (the "
+                                 "analytic method takes unions of spheres, boxes and planes); "
+                                 "use --method embree")
+
+
 def test_hits_beyond_max_distance_are_misses():
     # The floor seen from 1 above at a dip of 0.01 rad lies 100 away; with max_distance 50
     # the contract (and so the truth) sees nothing there.

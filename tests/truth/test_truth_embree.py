@@ -18,7 +18,7 @@ from truth_scenes import (CSG, EPSILON, HEIGHT, SPHERE_PLANE_BOX, WIDTH, cos_inc
 import marchlab
 from reference_cpu.scene_sdf import build_scene_sdf
 from reference_cpu.truth import ground_truth
-from scene_model.builder import Camera, RenderSettings, Scene, sphere
+from scene_model.builder import Camera, RenderSettings, Scene, box, sphere
 from scene_model.errors import SceneError
 from scene_model.shapes import Scale
 
@@ -131,6 +131,24 @@ def test_limited_repeat_meshed_by_marching_cubes_matches_the_analytic_copies(emb
     error = np.abs(mesh.depth[core] - exact.depth[core])
     assert mesh.error_terms["mesh"] > 0
     assert np.all(error * cos_incidence(exact.normal, directions)[core] <= mesh.error_bound)
+
+
+@pytest.mark.parametrize("t", [0.0, 0.6])
+def test_a_morph_is_meshed_through_its_sdf_and_agrees_with_the_reference(embree, t):
+    """Marching cubes meshes a morph like any other subtree, from its field. At t = 0 it is
+    the sphere, hit where the analytic sphere is hit; at t = 0.6 its hits and ids (the box's,
+    past one half) are the NumPy reference's, away from the silhouette."""
+    camera = Camera(position=(0.2, 1.0, 4.0), look_at=(0, 0, 0), fov=45)
+    morphed = Scene(camera=camera, objects=(sphere(0.6).morph(box(0.45).rotate(0, 30, 0), t),))
+    mesh = ground_truth(morphed, 32, 24, "embree", RESOLUTION)
+    if t == 0.0:
+        exact = ground_truth(Scene(camera=camera, objects=(sphere(0.6),)), 32, 24, "analytic")
+    else:
+        exact = marchlab.render(morphed, 32, 24, backend="numpy")
+    core = ~near_silhouette(exact.hit.astype(int))
+    np.testing.assert_array_equal(mesh.hit[core], exact.hit[core])
+    np.testing.assert_array_equal(mesh.object_id[core], exact.object_id[core])
+    assert set(np.unique(mesh.object_id[mesh.hit])) == {0 if t <= 0.5 else 1}
 
 
 def test_an_empty_solid_is_no_mesh_and_hides_nothing(embree):

@@ -1,16 +1,32 @@
 {# A template: gpu_shader/generate.py fills in the {{ }} and {% %} parts for one scene (Jinja). #}
 // Each object's material, by object id: the rows that follow the fixed parameters in U.
 // Row 0: (color, ka); row 1: (kd, ks, shininess, kr){% if checker %}; row 2: (checker color_a, scale);
-// row 3: (checker color_b, 1 if checkered){% endif %}.
+// row 3: (checker color_b, 1 if checkered){% endif %}{% if glass_row is not none %}; row {{ glass_row }}: (absorption, transparency);
+// row {{ glass_row + 1 }}: (ior, 0, 0, 0){% endif %}{% if model_row is not none %}; row {{ model_row }}: (shading model code, 0, 0, 0){% endif %}{% if texture_row is not none %};
+// row {{ texture_row }}: (texture image: first row, width, height, wrap); row {{ texture_row + 1 }}: (tint, scale);
+// row {{ texture_row + 2 }}: (mapping code: {% for name, code in mappings.items() %}{{ code }} {{ name }}, {% endfor %}0 without a texture; sharpness, 0, 0){% endif %}.
 #define MATERIAL(id, row) U[{{ first }} + {{ stride }} * (id) + (row)]
 
-// The albedo at p of the object hit: its colour{% if checker %}, or its checkerboard{% endif %}.
-vec3 surface_albedo(vec3 p, int id)
+// The albedo at p, with unit normal n, of the object hit: its colour{% if checker %}, or its checkerboard{% endif %}{% if texture_row is not none %}, or its
+// texture times the tint{% endif %}.
+vec3 surface_albedo(vec3 p, vec3 n, int id)
 {
 {% if checker %}
     if (MATERIAL(id, 3).w > 0.0) {
         return checker(p, MATERIAL(id, 2).xyz, MATERIAL(id, 3).xyz, MATERIAL(id, 2).w);
     }
+{% endif %}
+{% if texture_row is not none %}
+{% set T = texture_row %}
+{% set calls = {"triplanar": "texture_triplanar(p, n, MATERIAL(id, %d), MATERIAL(id, %d).w, MATERIAL(id, %d).y)" % (T, T + 1, T + 2),
+                "cube": "texture_cube(p, n, MATERIAL(id, %d), MATERIAL(id, %d).w)" % (T, T + 1),
+                "sphere": "texture_sphere(n, MATERIAL(id, %d))" % T} %}
+    real mapping = MATERIAL(id, {{ T + 2 }}).x;
+{% for name, code in mappings.items() %}
+    if (mapping == {{ "%d.0" % code }}) {
+        return MATERIAL(id, {{ T + 1 }}).xyz * {{ calls[name] }};
+    }
+{% endfor %}
 {% endif %}
     return MATERIAL(id, 0).xyz;
 }
@@ -21,5 +37,14 @@ vec3 surface_albedo(vec3 p, int id)
 real surface_checker_parity(vec3 p, int id)
 {
     return MATERIAL(id, 3).w > 0.0 ? checker_parity(p, MATERIAL(id, 2).w) : 0.0;
+}
+{% endif %}
+{% if path_labels and texture_row is not none and "cube" in mappings %}
+
+// The face of a cube-mapped texture at normal n (0 where the object has none): a feature of
+// the path label, as the texture may jump where the face changes.
+real surface_texture_face(vec3 n, int id)
+{
+    return MATERIAL(id, {{ texture_row + 2 }}).x == {{ "%d.0" % mappings["cube"] }} ? major_face(n) : 0.0;
 }
 {% endif %}

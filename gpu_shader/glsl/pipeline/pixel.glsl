@@ -1,8 +1,8 @@
 {# A template: gpu_shader/generate.py fills in the {{ }} and {% %} parts for one scene (Jinja). #}
+{% from "pipeline/shaded.glsl" import shaded_hit %}
 {% macro pixel(color, path) -%}
 {{ "vec4(%s, real(%s))" % (color, path) if path_labels else color }}
 {%- endmacro %}
-{% set shade = "shade_%s(p, n, -d, id)" % mode %}
 // The colour{{ " and path label" if path_labels }} of one pixel, given its primary ray, the march result h
 // and, on a hit, the normal n and object id there (reference_cpu/render.py, Tracer.trace).
 {{ "vec4" if path_labels else "vec3" }} pixel_color(vec3 origin, vec3 direction, Hit h, vec3 n, int id)
@@ -19,15 +19,7 @@
     }
     vec3 d = direction;
     precise vec3 p = origin + h.t * d;
-{% if path_labels %}
-    vec4 lit = {{ shade }};
-    vec3 shaded = lit.xyz;
-{% else %}
-    vec3 shaded = {{ shade }};
-{% endif %}
-{% if fog %}
-    shaded = apply_fog(shaded, h.t, FOG_COLOR, FOG_DENSITY);
-{% endif %}
+    {{ shaded_hit(shade, fog, path_labels) | indent(4) | trim }}
     return {{ pixel("shaded", "path_step(0u, id, uint(lit.w))") }};
 {% endif %}
 }

@@ -1,16 +1,21 @@
 {# A template: gpu_shader/generate.py fills in the {{ }} and {% %} parts for one scene (Jinja). #}
 {% macro sample(light) -%}
 {% set L = "LIGHT%d_" % light.index -%}
+{# A light with its own colours is sampled in white: what it gives is its fall-off. #}
+{% set R = "vec3(1.0)" if light.own else L + "RADIANCE" -%}
 {% if light.kind == "directional" -%}
-light_directional({{ L }}TO_LIGHT, {{ L }}RADIANCE)
+light_directional({{ L }}TO_LIGHT, {{ R }})
 {%- elif light.kind == "point" -%}
-light_point(p, {{ L }}POSITION, {{ L }}RADIANCE, {{ L }}ATTENUATION)
+light_point(p, {{ L }}POSITION, {{ R }}, {{ L }}ATTENUATION)
 {%- else -%}
-light_spot(p, {{ L }}POSITION, {{ L }}RADIANCE, {{ L }}ATTENUATION, {{ L }}AXIS, {{ L }}CONE)
+light_spot(p, {{ L }}POSITION, {{ R }}, {{ L }}ATTENUATION, {{ L }}AXIS, {{ L }}CONE)
 {%- endif %}
 {%- endmacro %}
-{% set specular = "specular_blinn_phong" if mode == "blinn_phong" else "specular_phong" %}
-{% if shadows != "none" and lights %}
+{% set specular = "specular_blinn_phong" if model == "blinn_phong" else "specular_phong" %}
+{% set band = {"toon": "toon_band", "stripes": "stripes_band"}.get(model) %}
+{% set D = "%s(diffuse(n, s.to_light), TOON_BANDS)" % band if band else "diffuse(n, s.to_light)" %}
+{% set S = "%s(%s(n, s.to_light, v, shininess), TOON_BANDS)" % (band, specular) if band else "%s(n, s.to_light, v, shininess)" % specular %}
+{% if helpers and shadows != "none" and lights %}
 // Whether light s needs a shadow ray at p: points facing away from the light, or where it
 // sends nothing, need none, as their diffuse and specular terms are zero whatever the
 // visibility (taken as 1).
@@ -44,23 +49,23 @@ vec2 lights_visible(vec3 p, vec3 n, LightSample a, LightSample b)
 {% endif %}
 
 {% endif %}
-// The {{ mode }} model (reference_cpu/shading.py) summed over the lights, plus ambient.
+// The {{ model }} model (reference_cpu/shading.py) summed over the lights, plus ambient.
 {% if path_labels %}
-// Returns (colour, features): features codes the checker cell and, one bit per light,
-// whether a hard shadow blocked it (for the path label).
-vec4 shade_{{ mode }}(vec3 p, vec3 n, vec3 v, int id)
+// Returns (colour, features): features codes the checker cell or the texture's face and, one
+// bit per light, whether a hard shadow blocked it (for the path label).
+vec4 shade_{{ model }}(vec3 p, vec3 n, vec3 v, int id)
 {% else %}
-vec3 shade_{{ mode }}(vec3 p, vec3 n, vec3 v, int id)
+vec3 shade_{{ model }}(vec3 p, vec3 n, vec3 v, int id)
 {% endif %}
 {
-    vec3 albedo = surface_albedo(p, id);
+    vec3 albedo = surface_albedo(p, n, id);
     real ka = MATERIAL(id, 0).w;
     real kd = MATERIAL(id, 1).x;
     real ks = MATERIAL(id, 1).y;
     real shininess = MATERIAL(id, 1).z;
     vec3 color = ka * albedo * AMBIENT;
 {% if path_labels %}
-    real features = {{ "surface_checker_parity(p, id)" if checker else "0.0" }};
+    real features = {{ features }};
 {% endif %}
 {% if shadows != "none" %}
     real visible;
@@ -76,7 +81,8 @@ vec3 shade_{{ mode }}(vec3 p, vec3 n, vec3 v, int id)
 {% endfor %}
 {% endif %}
 {% for light in lights %}
-    // light {{ light.index }}: {{ light.kind }}
+{% set L = "LIGHT%d_" % light.index %}
+    // light {{ light.index }}: {{ light.kind }}{{ ", with its own ambient, diffuse and specular colours" if light.own }}
     s = {{ "s%d" % light.index if paired else sample(light) }};
 {% if shadows != "none" %}
 {% if light.index < paired %}
@@ -84,15 +90,22 @@ vec3 shade_{{ mode }}(vec3 p, vec3 n, vec3 v, int id)
 {% else %}
     visible = light_visible(p, n, s);
 {% endif %}
+{% endif %}
+{% if light.own %}
+    vec3 falloff{{ light.index }} = s.radiance;
+    s.radiance = falloff{{ light.index }} * {{ L }}RADIANCE;
+{% endif %}
+{% if shadows != "none" %}
     s.radiance = visible * s.radiance;
 {% endif %}
 {% if path_labels %}
     features = 2.0 * features{{ " + (visible == 0.0 ? 1.0 : 0.0)" if shadows == "hard" }};
 {% endif %}
-{% if mode == "toon" %}
-    color = color + s.radiance * (kd * toon_band(diffuse(n, s.to_light), TOON_BANDS) * albedo + ks * toon_band({{ specular }}(n, s.to_light, v, shininess), TOON_BANDS));
+{% if light.own %}
+    color = color + s.radiance * (kd * {{ D }} * albedo) + {{ "visible * " if shadows != "none" }}(falloff{{ light.index }} * {{ L }}SPECULAR) * (ks * {{ S }});
+    color = color + ka * albedo * {{ "%sAMBIENT" % L if light.kind == "directional" else "attenuation(s.distance, %sATTENUATION) * %sAMBIENT" % (L, L) }};
 {% else %}
-    color = color + s.radiance * (kd * diffuse(n, s.to_light) * albedo + ks * {{ specular }}(n, s.to_light, v, shininess));
+    color = color + s.radiance * (kd * {{ D }} * albedo + ks * {{ S }});
 {% endif %}
 {% endfor %}
     return {{ "vec4(color, features)" if path_labels else "color" }};

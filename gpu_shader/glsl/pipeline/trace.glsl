@@ -1,5 +1,5 @@
 {# A template: gpu_shader/generate.py fills in the {{ }} and {% %} parts for one scene (Jinja). #}
-{% set shade = "shade_%s(p, n, -d, id)" % mode %}
+{% from "pipeline/shaded.glsl" import shaded_hit %}
 {% if not reflections %}
 // One pixel, from its camera ray to everything the Frame holds (reference_cpu/render.py,
 // Tracer.trace): the primary ray's march and, on a hit, the normal and object id there;
@@ -29,7 +29,8 @@ Pixel trace(vec3 origin, vec3 direction, real start)
 // One pixel, from its camera ray to everything the Frame holds (reference_cpu/render.py,
 // Tracer.trace and lit_color), with Whitted's mirror reflections. Each bounce marches its
 // ray, shades the hit and adds the colour weighted by the product of the kr seen so far; a
-// ray that hits nothing adds the background. Bounce 0 is the camera ray: its march, normal
+// ray that hits nothing adds the background; a weight of at most MIN_RAY_WEIGHT ends the
+// chain (reference_cpu/refraction.py). Bounce 0 is the camera ray: its march, normal
 // and object id are the pixel's primary buffers. (The reference marches the camera ray
 // first, then loops; here the loop does it, so that llvmpipe, which runs every statement of
 // a loop body for a whole block of pixels, never runs a march or a normal twice.) The camera
@@ -42,6 +43,7 @@ Pixel trace(vec3 origin, vec3 direction, real start)
     vec3 color = vec3(0.0);
 {% if path_labels %}
     uint path = 0u;
+    uint label = 0u;
 {% endif %}
     real weight = 1.0;
     vec3 o = origin;
@@ -55,7 +57,10 @@ Pixel trace(vec3 origin, vec3 direction, real start)
         if (h.hit == 0) {
             color = color + weight * background(d);
 {% if path_labels %}
-            path = path_step(path, -1, 0u);
+            label = path_step(label, -1, 0u);
+            if (weight > LABEL_WEIGHT) {
+                path = (path + label) & 0xFFFFFFu;
+            }
 {% endif %}
             break;
         }
@@ -66,26 +71,22 @@ Pixel trace(vec3 origin, vec3 direction, real start)
             px.normal = n;
             px.id = id;
         }
-{% if path_labels %}
-        vec4 lit = {{ shade }};
-        vec3 shaded = lit.xyz;
-{% else %}
-        vec3 shaded = {{ shade }};
-{% endif %}
-{% if fog %}
-        shaded = apply_fog(shaded, h.t, FOG_COLOR, FOG_DENSITY);
-{% endif %}
+        {{ shaded_hit(shade, fog, path_labels) | indent(8) | trim }}
         color = color + weight * shaded;
 {% if path_labels %}
-        path = path_step(path, id, uint(lit.w));
+        label = path_step(label, id, uint(lit.w));
+        if (weight > LABEL_WEIGHT) {
+            path = (path + label) & 0xFFFFFFu;
+        }
 {% endif %}
         weight = weight * MATERIAL(id, 1).w;
-        if (bounce == REFLECTION_DEPTH || !(weight > 0.0)) {
+        if (bounce == REFLECTION_DEPTH || !(weight > MIN_RAY_WEIGHT)) {
             break;
         }
-        // Continue just off the mirror, in the mirrored direction.
-        o = p + SURFACE_OFFSET * n;
-        d = reflect(d, n);
+        // Continue just off the mirror on the ray's side, in the mirrored direction.
+        vec3 n_facing = dot(d, n) < 0.0 ? n : -n;
+        o = p + SURFACE_OFFSET * n_facing;
+        d = reflect(d, n_facing);
         t0 = 0.0;
     }
     px.color = color;
