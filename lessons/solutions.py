@@ -196,6 +196,40 @@ def momentum(mass, velocity):
     return np.sum(mass[:, None] * velocity, axis=0)
 
 
+# --- lesson 8 ---------------------------------------------------------------------------------
+
+def refract(d, n_facing, cos_i, eta):
+    # d, n_facing : (N, 3) unit, d.n_facing < 0; cos_i, eta = n1 / n2 : (N,).
+    # Return the (N, 3) refracted directions, zero where the reflection is total.
+    # The part along the surface, d + cos_i n, scales by eta (Snell: sin t = eta sin i); the
+    # part along -n has length cos_t = sqrt(k), which does not exist where k <= 0.
+    k = 1 - eta * eta * (1 - cos_i * cos_i)
+    cos_t = np.sqrt(np.maximum(k, 0.0))
+    along_surface = eta[:, None] * (d + cos_i[:, None] * n_facing)
+    t = along_surface - cos_t[:, None] * n_facing
+    return np.where((k <= 0)[:, None], 0.0, t)
+
+
+def critical_angle(ior):
+    # ior : (N,) indices of refraction (at least 1). Return (N,) angles in radians.
+    # Leaving glass eta = ior, and k = 1 - ior^2 sin^2 i = 0 at sin i = 1 / ior.
+    return np.arcsin(1.0 / np.asarray(ior, np.float64))
+
+
+def fresnel_schlick(cos_i, cos_t, n1, n2):
+    # cos_i, cos_t, n1, n2 : (N,). Return (N,) the reflected fraction F.
+    # R0 is the head-on value; c is the cosine on the side of the lower index (the air).
+    r0 = ((n1 - n2) / (n1 + n2)) ** 2
+    c = np.where(n1 > n2, cos_t, cos_i)
+    return r0 + (1 - r0) * (1 - c) ** 5
+
+
+def beer_lambert(absorption, distance):
+    # absorption : (N, 3) per unit length; distance : (N,). Return (N, 3) the fraction left.
+    # dI = -sigma I ds integrates to I = I0 exp(-sigma s), per channel.
+    return np.exp(-absorption * np.asarray(distance)[:, None])
+
+
 SOLUTIONS = {name: function for name, function in list(globals().items())
              if inspect.isfunction(function) and not name.startswith("_")
              and function.__module__ == __name__}

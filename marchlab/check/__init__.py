@@ -3,7 +3,7 @@
 A student writes, say, ``sdf_torus`` in a notebook and calls ``marchlab.check.sdf_torus(fn)``:
 the check compares it with marchlab's own function on random inputs and prints what is wrong
 (or that it passed). Graphics exercises live in `graphics` (which gathers one module per
-lesson topic: `sdf`, `operators`, `marching`, `shading`, `shadows`; they are judged by
+lesson topic: `sdf`, `operators`, `marching`, `shading`, `shadows`, `glass`; they are judged by
 `judge`), physics ones in `physics` (gathering `impulses`, `integration`, `invariants`;
 judged by `physics_judge`).
 """

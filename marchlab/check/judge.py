@@ -13,12 +13,12 @@ the check returns a `~marchlab.check.result.CheckResult`, which is true only whe
 passed.
 
 The topic modules (`marchlab.check.sdf`, `marchlab.check.operators`, `marchlab.check.shading`,
-`marchlab.check.marching`, `marchlab.check.shadows`) only say what to try: the inputs of each
-exercise and its known mistakes. They hand them to `compare` here, which runs both functions
-and writes the verdict. What several topics share is public: `compare`, the sizes `CASES` and
-`SAMPLES`, the random inputs `random_points` and `unit_vectors`, and the scene shadow rays are
-checked in, `sample_scene_sdf`. Names with a leading underscore are the verdict's own
-machinery, used only here.
+`marchlab.check.marching`, `marchlab.check.shadows`, `marchlab.check.glass`) only say what to
+try: the inputs of each exercise and its known mistakes. They hand them to `compare` here,
+which runs both functions and writes the verdict. What several topics share is public:
+`compare`, the sizes `CASES` and `SAMPLES`, the random inputs `random_points` and
+`unit_vectors`, and the scene shadow rays are checked in, `sample_scene_sdf`. Names with a
+leading underscore are the verdict's own machinery, used only here.
 """
 
 from __future__ import annotations

@@ -15,8 +15,9 @@ import pytest
 
 from marchlab import check
 from marchlab.check import graphics
+from marchlab.check.glass import measured_critical_angle, refracted
 from marchlab.check.marching import marched_steps
-from reference_cpu import march as M, sdf as S, shading as SH, shadows as SW
+from reference_cpu import march as M, refraction as RF, sdf as S, shading as SH, shadows as SW
 from reference_cpu.lights import attenuation
 from scene_model.geometry import dot, normalize
 
@@ -35,6 +36,8 @@ REFERENCES = {
     "shade_blinn_phong": SH.shade_blinn_phong, "attenuation": attenuation,
     "steps_to_floor": marched_steps,
     "hard_shadow": SW.hard_shadow, "soft_shadow": SW.soft_shadow,
+    "refract": refracted, "critical_angle": measured_critical_angle,
+    "fresnel_schlick": RF.fresnel_schlick, "beer_lambert": RF.beer_lambert,
 }
 # marchlab.render is also the name of the render function in marchlab/__init__.py
 render_module = importlib.import_module("marchlab.render")
@@ -95,6 +98,28 @@ def _soft_shadow_keeping_blocked(sdf, o, l, distance, max_steps, epsilon, far, k
     if zero:
         visible[blocked] = 0
     return np.clip(visible, 0, 1)
+
+
+def _refract(d, n, cos_i, eta, total_to_zero=True, sign_t=1.0):
+    """Snell's law written out, t = eta d + (eta cos_i - cos_t) n; without ``total_to_zero``
+    the square root of a negative k is left as nan; ``sign_t=-1`` sends the ray back out."""
+    with np.errstate(invalid="ignore"):
+        cos_t = np.sqrt(1 - eta * eta * (1 - cos_i * cos_i))
+    t = eta[:, None] * d + (eta * cos_i - sign_t * cos_t)[:, None] * n
+    return np.where(np.isnan(cos_t)[:, None], 0.0, t) if total_to_zero else t
+
+
+def _refract_reflecting_when_total(d, n, cos_i, eta):
+    """Snell's law, with the mirror direction where the reflection is total."""
+    t, _, total = RF.refract(d, n, cos_i, eta)
+    return np.where(total[:, None], SH.reflect(d, n), t)
+
+
+def _schlick(cos_i, cos_t, n1, n2, c=None, square=True):
+    """Schlick's F with the cosine ``c`` chosen by the caller (default: the low-index side's)."""
+    r0 = ((n1 - n2) / (n1 + n2)) ** (2 if square else 1)
+    c = np.where(n1 > n2, cos_t, cos_i) if c is None else c
+    return r0 + (1 - r0) * (1 - c) ** 5
 
 
 # (check, a plausible wrong answer, words the verdict must contain)
@@ -165,6 +190,20 @@ WRONG = [
      "counts every SDF evaluation, the last one too"),
     ("hard_shadow", lambda *args: 1 - SW.hard_shadow(*args), "other way round"),
     ("soft_shadow", _soft_shadow_keeping_blocked, "set the visibility of blocked rays to 0"),
+    ("refract", lambda *a: _refract(*a, total_to_zero=False),
+     "total internal reflection is not handled"),
+    ("refract", lambda d, n, c, e: RF.refract(d, n, c, 1 / e)[0], "your function uses 1 / η"),
+    ("refract", _refract_reflecting_when_total, "return the zero vector"),
+    ("refract", lambda *a: _refract(*a, sign_t=-1.0), "away from n_facing"),
+    ("critical_angle", lambda ior: np.arctan(1 / ior), "Brewster's angle"),
+    ("critical_angle", lambda ior: np.degrees(np.arcsin(1 / ior)), "in radians"),
+    ("fresnel_schlick", lambda ci, ct, n1, n2: _schlick(ci, ct, n1, n2, c=ci),
+     "leaving glass (n1 > n2) Schlick's c is cos t"),
+    ("fresnel_schlick", lambda ci, ct, n1, n2: _schlick(ci, ct, n1, n2, c=ct),
+     "entering glass (n1 < n2) Schlick's c is cos i"),
+    ("fresnel_schlick", lambda *a: _schlick(*a, square=False), "the square is missing"),
+    ("beer_lambert", lambda a, s: np.exp(a * s[:, None]), "the sign"),
+    ("beer_lambert", lambda a, s: 1 - a * s[:, None], "first-order term"),
 ]
 
 
@@ -323,6 +362,46 @@ def test_a_correct_rewrite_passes_within_the_tolerance():
     for name, function in (("sdf_torus", torus), ("specular_blinn_phong", blinn)):
         result = run(name, function)
         assert result.passed and result.max_error <= graphics.TOLERANCE
+
+
+# --- glass (lesson 08) ---------------------------------------------------------------------
+
+def test_refract_written_from_the_two_parts_of_the_lesson_passes_within_the_tolerance():
+    """Lesson 08's route: eta times the part of d along the surface, minus cos t along n."""
+    def refract(d, n, cos_i, eta):
+        k = 1 - eta ** 2 * (1 - cos_i ** 2)
+        t = (eta[:, None] * (d + cos_i[:, None] * n)
+             - np.sqrt(np.clip(k, 0, None))[:, None] * n)
+        return np.where((k <= 0)[:, None], 0.0, t)
+
+    result = run("refract", refract)
+    assert result.passed and result.max_error <= graphics.TOLERANCE
+
+
+def test_refract_is_checked_where_the_reflection_is_total():
+    """A third or more of the check's rays are beyond the critical angle: a function that is
+    right everywhere else but forgets them fails on those rays and no others."""
+    result = run("refract", lambda *a: _refract(*a, total_to_zero=False))
+    wrong = int(" ".join(result.message.split()).split("wrong at ")[1].split()[0])
+    assert 0.3 * result.samples < wrong < 0.5 * result.samples
+
+
+def test_critical_angle_measured_on_refract_is_arcsin_of_one_over_ior_within_1e_15():
+    """The bisection on marchlab's refract finds Snell's sin i = 1 / ior to float64 rounding."""
+    ior = np.linspace(1.1, 4.0, 300)
+    np.testing.assert_allclose(measured_critical_angle(ior), np.arcsin(1 / ior), rtol=0,
+                               atol=1e-15)
+    assert run("critical_angle", lambda ior: np.arcsin(1 / ior)).max_error < 1e-15
+
+
+def test_fresnel_schlick_cases_refract_both_ways_below_the_critical_angle():
+    """Half the check's pairs enter glass and half leave it, all obeying Snell's law, so the
+    choice of the cosine is tested both ways."""
+    from marchlab.check.glass import _snell_pairs
+    cos_i, cos_t, n1, n2 = _snell_pairs(np.random.default_rng(0))
+    assert (n1 > n2).sum() == (n1 < n2).sum() == len(n1) // 2
+    sin_i, sin_t = np.sqrt(1 - cos_i ** 2), np.sqrt(1 - cos_t ** 2)
+    np.testing.assert_allclose(n1 * sin_i, n2 * sin_t, atol=1e-12)
 
 
 # --- fastest_backend (marchlab/render.py) ------------------------------------------------------
