@@ -126,6 +126,26 @@ def separations(axes, centre_a, rotation_a, half_a, centre_b, rotation_b, half_b
     return np.abs(axes @ (centre_a - centre_b)) - (radius_a + radius_b)
 
 
+def largest_separation(centre_a, rotation_a, half_a, centre_b, rotation_b, half_b):
+    """The largest of the 15 separations (K,) of K pairs of boxes at once (m): `candidate_axes`
+    and `separations` on stacks of K pairs ((K, 3) centres and half sizes, (K, 3, 3)
+    rotations), the near-parallel edge axes left out. Positive exactly when the boxes are
+    apart (the separating axis theorem), and never more than their distance: a shadow is
+    never farther from another than the boxes are. What a swept test advances by
+    (solid_sweeps.py); tests/physics/test_solid_sweeps.py checks it against the two."""
+    axes_a, axes_b = np.swapaxes(rotation_a, 1, 2), np.swapaxes(rotation_b, 1, 2)
+    crossed = np.cross(axes_a[:, :, None, :], axes_b[:, None, :, :]).reshape(-1, 9, 3)
+    length = np.sqrt(np.sum(crossed * crossed, axis=2))
+    usable = length > PARALLEL_TOLERANCE
+    crossed = crossed * (usable / np.where(usable, length, 1))[:, :, None].astype(crossed.dtype)
+    axes = np.concatenate([axes_a, axes_b, crossed], axis=1)                 # (K, 15, 3)
+    radius_a = np.sum(np.abs(axes @ rotation_a) * half_a[:, None, :], axis=2)
+    radius_b = np.sum(np.abs(axes @ rotation_b) * half_b[:, None, :], axis=2)
+    apart = np.abs(np.einsum("kmj,kj->km", axes, centre_a - centre_b)) - (radius_a + radius_b)
+    usable = np.concatenate([np.ones((len(axes), 6), bool), usable], axis=1)
+    return np.max(np.where(usable, apart, -np.inf), axis=1)
+
+
 def choose_axis(separation, usable, absolute, relative=RELATIVE_TOLERANCE) -> int:
     """The axis (index into ``candidate_axes``) whose contact is built: a's best face axis,
     unless b's, and then an edge axis, beats it by margin(s) = relative |s| + absolute (m)."""

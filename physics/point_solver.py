@@ -146,7 +146,7 @@ def visiting_order(point, gravity) -> np.ndarray:
 
 
 def solve_points(bodies: PointBodies, contacts, gravity_part, h, threshold, iterations, warm,
-                 counter=None, gravity=(0.0, 0.0, 0.0)):
+                 counter=None, gravity=(0.0, 0.0, 0.0), restitution_passes=None):
     """Sequential impulses at contact points. Updates ``bodies`` in place.
 
     Parameters
@@ -172,6 +172,8 @@ def solve_points(bodies: PointBodies, contacts, gravity_part, h, threshold, iter
         Gets ``"resting passes"``, ``"restitution passes"`` and ``"solver levels"`` added.
     gravity : (3,) array_like
         The contacts are visited from the highest (along -gravity) down: see `visiting_order`.
+    restitution_passes : int, optional
+        Most passes of the restitution stage, if not ``iterations``.
 
     Returns
     -------
@@ -244,7 +246,8 @@ def solve_points(bodies: PointBodies, contacts, gravity_part, h, threshold, iter
     # approaching faster than the threshold before the solve.
     bounce = (approach > threshold) & (total[:, 0] > 0)
     bouncing = [row for row in rows if np.any(bounce[row[0]] & (contacts.restitution[row[0]] > 0))]
-    for _ in range(iterations if bouncing else 0):
+    most = iterations if restitution_passes is None else restitution_passes
+    for _ in range(most if bouncing else 0):
         counter["restitution passes"] += 1
         change = 0.0
         for row in bouncing:

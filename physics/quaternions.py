@@ -51,3 +51,21 @@ def rotation_matrices(orientation: np.ndarray) -> np.ndarray:
         np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], axis=1),
     ], axis=1)
 
+
+
+def rotation_vector_between(start: np.ndarray, end: np.ndarray) -> np.ndarray:
+    """The world-frame rotation vector r (N, 3) with exp(r) start = end, the shorter way round,
+    for unit quaternions start, end : (N, 4): the inverse of `rotate_orientations`.
+
+    The turn end start^-1 = (cos(a/2), sin(a/2) k) gives the angle a = 2 atan2(|sin part|,
+    cos part) (with the cos part made >= 0: q and -q are the same turn, and the shorter one
+    has a <= pi) and r = a k; a / sin(a/2) tends to 2 for a small turn, which the formula
+    below keeps without dividing by zero.
+    """
+    conjugate = start * np.array([1, -1, -1, -1], start.dtype)
+    turn = quaternion_multiply(end, conjugate)
+    turn = np.where(turn[:, :1] < 0, -turn, turn)
+    sine = np.sqrt(np.sum(turn[:, 1:] * turn[:, 1:], axis=1))
+    angle = 2 * np.arctan2(sine, turn[:, 0])
+    scale = np.where(sine > 0, angle / np.where(sine > 0, sine, 1), 2.0)
+    return (scale[:, None] * turn[:, 1:]).astype(start.dtype, copy=False)

@@ -24,12 +24,16 @@ finds its points, the exact test where there is one, samples where there is not:
 where a sample is inside; what lies between two samples is not seen, so a peg thinner than
 half a box's side can poke into its face. docs/physics.md says so.)
 
-A contact is found while its gap is below a **speculative margin**: the slop plus how far the
-two surfaces can close in one step, h (|v| + R |w|) + h^2 |g| for each body (R its bounding
-radius). The solver lets such a contact close its gap and no more (target normal velocity
--gap / h, as in Box2D v3's speculative contacts), so a box falling at any speed lands on the
-floor instead of a step into it. Each contact has a key that names it from step to step (the
-pair and a feature: which corner, which sample), for warm starting.
+A contact is found while its gap is below each body's **reach** (`contact_reach`): the slop
+plus how far the two surfaces can close in one step, h (|v| + R |w|) + h^2 |g| for each body
+(R its bounding radius), but never more than `SPECULATIVE_SLOPS` slops. The solver lets such a
+contact close its gap and no more (target normal velocity -gap / h, as in Box2D v3's
+speculative contacts), and bounces it if it pushed; the cap is Box2D v3's
+b2_speculativeDistance (4 b2_linearSlop, constants.h): a speculative contact that bounces
+turns the body round where it is, at most its gap away from the surface, so the gap must stay
+small. What a body could reach beyond its reach in a step is found by the swept test of
+solid_sweeps.py, at its time of impact. Each contact has a key that names it from step to step
+(the pair and a feature: which corner, which sample), for warm starting.
 """
 
 from __future__ import annotations
@@ -50,6 +54,10 @@ FEATURES = 4096          # features per pair in a contact key (box_contacts stay
 SCAN_POINTS = 17         # points along a capsule's segment looked at first for its nearest
 TERNARY_STEPS = 24       # then this many steps, each keeping 2/3 of the bracket: 1e-5 of it
 END_SKIP = 0.01          # the nearest point within this fraction of an end: the end's contact
+# The largest gap (in slops) at which a contact is speculative: Box2D v3's
+# b2_speculativeDistance = 4 b2_linearSlop. A contact the solver bounces is at most this far
+# from the surface, so a bounce never happens farther away ("ghost" bounces).
+SPECULATIVE_SLOPS = 4
 
 
 @dataclass
@@ -122,9 +130,21 @@ def speculative_margin(world) -> np.ndarray:
     return (world.slop + h * (speed + reach * spin) + h * h * gravity).astype(world.dtype)
 
 
-def find_solid_contacts(world, shapes, shape_slots: int) -> PointContacts:
-    """Every contact of the world's active boxes and capsules, with gap below the speculative
-    margin (`speculative_margin`), sorted by key.
+def speculative_distance(world) -> float:
+    """The largest gap (m) of a speculative contact: `SPECULATIVE_SLOPS` slops."""
+    return SPECULATIVE_SLOPS * world.slop
+
+
+def contact_reach(world) -> np.ndarray:
+    """The largest gap (m) at which each body's contacts are found, (N,): its
+    `speculative_margin`, capped at the `speculative_distance`."""
+    return np.minimum(speculative_margin(world),
+                      world.dtype(speculative_distance(world))).astype(world.dtype)
+
+
+def find_solid_contacts(world, shapes, shape_slots: int, reach=None) -> PointContacts:
+    """Every contact of the world's active boxes and capsules, with gap below the bodies'
+    reach (`contact_reach`), sorted by key.
 
     Parameters
     ----------
@@ -133,11 +153,13 @@ def find_solid_contacts(world, shapes, shape_slots: int) -> PointContacts:
         The static shapes where they are now.
     shape_slots : int
         Contacts a sphere may have per shape (for the key base, see `solid_key_base`).
+    reach : (N,) ndarray, optional
+        Each body's reach (m); default `contact_reach`.
     """
     n = world.count
     planes, nshapes = len(world.plane_offset), len(shapes)
     solids = np.flatnonzero(world.active & (world.kind != SPHERE))
-    margin = speculative_margin(world)
+    margin = contact_reach(world) if reach is None else reach
     parts = []
     if len(solids):
         parts += _plane_contacts(world, solids, margin)
@@ -146,6 +168,18 @@ def find_solid_contacts(world, shapes, shape_slots: int) -> PointContacts:
     statics = n + 1 + planes + nshapes
     base = solid_key_base(n, planes, nshapes, shape_slots)
     return _join(parts, n, statics, base, world.dtype)
+
+
+def static_contacts(world, shapes, rows, margin, pose, shape_slots: int) -> PointContacts:
+    """The contacts of solids ``rows`` (M,) with the planes and ``shapes``, gap below
+    ``margin`` (N,), with the bodies at ``pose`` = (position (N, 3), orientation (N, 4)) and
+    their lever arms from there: what a swept test resolves at a time of impact."""
+    n, planes = world.count, len(world.plane_offset)
+    parts = (_plane_contacts(world, rows, margin, pose)
+             + _shape_contacts(world, shapes, rows, margin, pose))
+    contacts = _join(parts, n, n + 1 + planes + len(shapes),
+                     solid_key_base(n, planes, len(shapes), shape_slots), world.dtype)
+    return with_levers(contacts, pose[0])
 
 
 def _part(a, b, other, other_id, kind, feature, point, normal, gap, restitution, friction,
@@ -231,18 +265,20 @@ def join_point_contacts(first: PointContacts, second: PointContacts) -> PointCon
 
 # --- the pairs ----------------------------------------------------------------------------
 
-def _support(world, rows, which: str):
+def support_points(world, rows, which: str, pose=None):
     """Points of bodies ``rows`` that meet a plane or an SDF first: (body (K,), point (K, 3),
     radius (K,), feature (K,)). Boxes: their corners (``which = "corners"``) or 26 surface
     points (``"surface"``), radius 0. Capsules: their two ends, or CAPSULE_SAMPLES points along
-    the segment, with the capsule's radius."""
+    the segment, with the capsule's radius. ``pose`` = (position (N, 3), orientation (N, 4))
+    places the bodies elsewhere than the world has them (a swept test's time of impact)."""
     dtype = world.dtype
+    position, orientation = (world.position, world.orientation) if pose is None else pose
     body, point, radius, feature = [], [], [], []
     boxes = rows[world.kind[rows] == BOX]
     if len(boxes):
         local = box_points(world.extent[boxes], which).astype(dtype)       # (M, P, 3)
-        rotation = rotation_matrices(world.orientation[boxes])
-        where = world.position[boxes][:, None, :] + np.einsum("mij,mpj->mpi", rotation, local)
+        rotation = rotation_matrices(orientation[boxes])
+        where = position[boxes][:, None, :] + np.einsum("mij,mpj->mpi", rotation, local)
         count = local.shape[1]
         body.append(np.repeat(boxes, count))
         point.append(where.reshape(-1, 3))
@@ -250,7 +286,7 @@ def _support(world, rows, which: str):
         feature.append(np.tile(np.arange(count), len(boxes)))
     capsules = rows[world.kind[rows] == CAPSULE]
     if len(capsules):
-        start, end = capsule_ends(world.position[capsules], world.orientation[capsules],
+        start, end = capsule_ends(position[capsules], orientation[capsules],
                                   world.extent[capsules])
         t = np.array([0.0, 1.0]) if which == "corners" else np.linspace(0, 1, CAPSULE_SAMPLES)
         where = start[:, None, :] + t[None, :, None].astype(dtype) * (end - start)[:, None, :]
@@ -266,8 +302,8 @@ def _kind(world, body) -> np.ndarray:
     return np.asarray(KIND_NAMES)[world.kind[body]]
 
 
-def _plane_contacts(world, solids, margin) -> list:
-    body, point, radius, feature = _support(world, solids, "corners")
+def _plane_contacts(world, solids, margin, pose=None) -> list:
+    body, point, radius, feature = support_points(world, solids, "corners", pose)
     n = world.count
     parts = []
     for plane, (normal, offset) in enumerate(zip(world.plane_normal, world.plane_offset)):
@@ -283,8 +319,8 @@ def _plane_contacts(world, solids, margin) -> list:
     return parts
 
 
-def _shape_contacts(world, shapes, solids, margin) -> list:
-    body, point, radius, feature = _support(world, solids, "surface")
+def _shape_contacts(world, shapes, solids, margin, pose=None) -> list:
+    body, point, radius, feature = support_points(world, solids, "surface", pose)
     n, planes = world.count, len(world.plane_offset)
     parts = []
     for index, shape in enumerate(shapes):
@@ -388,6 +424,39 @@ def _box_box(world, a, b, reach) -> dict:
                  gap, e, mu)
 
 
+def box_distance_along(start, end, centre, rotation, half, t):
+    """The box's signed distance (T,) and its gradient in the box's frame (T, 3) at the points
+    start + t (end - start) of a segment, for t (T,); start, end (1, 3), the box's centre (3,),
+    rotation (3, 3) and half sizes (3,)."""
+    t = np.asarray(t, start.dtype)
+    local = (start + t[:, None] * (end - start) - centre) @ rotation
+    return box_distance(local, np.broadcast_to(half, local.shape))
+
+
+def segment_nearest_box(start, end, centre, rotation, half):
+    """The parameter t of the point of the segment start-end (each (1, 3)) nearest to a box,
+    and how far (m) the point found may be from the true nearest one.
+
+    The signed distance to a convex solid is convex, and so along a segment: the least of a
+    few samples brackets the nearest point, and a ternary search narrows the bracket (each
+    step keeps 2/3 of it). The distance is 1-Lipschitz, so the least distance along the
+    segment is at least the distance at t less that bound.
+    """
+    scan = np.linspace(0, 1, SCAN_POINTS)
+    best = int(np.argmin(box_distance_along(start, end, centre, rotation, half, scan)[0]))
+    low, high = scan[max(best - 1, 0)], scan[min(best + 1, SCAN_POINTS - 1)]
+    for _ in range(TERNARY_STEPS):
+        third = (high - low) / 3
+        pair = box_distance_along(start, end, centre, rotation, half,
+                                  [low + third, high - third])[0]
+        if pair[0] <= pair[1]:
+            high = high - third
+        else:
+            low = low + third
+    length = float(np.sqrt(np.sum((end - start) ** 2)))
+    return 0.5 * (low + high), 0.5 * (high - low) * length
+
+
 def _capsule_box(world, capsule, box, reach) -> dict:
     """The capsule's segment ends and its point nearest the box: the capsule is a."""
     x, dtype = world.position, world.dtype
@@ -395,26 +464,9 @@ def _capsule_box(world, capsule, box, reach) -> dict:
                               world.extent[capsule:capsule + 1])
     rotation = rotation_matrices(world.orientation[box:box + 1])[0]
     half = world.extent[box]
-
-    def distance(t):
-        local = (start + np.asarray(t, dtype)[:, None] * (end - start) - x[box]) @ rotation
-        return box_distance(local, np.broadcast_to(half, local.shape))
-
-    # The signed distance to a convex solid is convex, and so along a segment: the least of a
-    # few samples brackets the nearest point, and a ternary search narrows the bracket.
-    scan = np.linspace(0, 1, SCAN_POINTS)
-    best = int(np.argmin(distance(scan)[0]))
-    low, high = scan[max(best - 1, 0)], scan[min(best + 1, SCAN_POINTS - 1)]
-    for _ in range(TERNARY_STEPS):
-        third = (high - low) / 3
-        pair = distance([low + third, high - third])[0]
-        if pair[0] <= pair[1]:
-            high = high - third
-        else:
-            low = low + third
-    middle = 0.5 * (low + high)
+    middle, _ = segment_nearest_box(start, end, x[box], rotation, half)
     t = np.array([0.0, 1.0] + ([middle] if END_SKIP < middle < 1 - END_SKIP else []))
-    d, gradient = distance(t)
+    d, gradient = box_distance_along(start, end, x[box], rotation, half, t)
     normal = (gradient @ rotation.T).astype(dtype)
     gap = (d - world.radius[capsule]).astype(dtype)
     near = gap <= reach

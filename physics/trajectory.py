@@ -50,17 +50,20 @@ class Trajectory:
     events: np.ndarray
 
     def to_csv(self, path) -> None:
-        """One row per record and sphere: time, body, x, y, z, vx, vy, vz, wx, wy, wz, active."""
+        """One row per record and body: time, body, x, y, z, vx, vy, vz, wx, wy, wz, the
+        orientation as a unit quaternion qw, qx, qy, qz (a box's or capsule's pose; a
+        sphere's spin), and active. Numbers are written to round-trip exactly."""
         with open(path, "w", newline="") as handle:
             writer = csv.writer(handle)
             writer.writerow(["time", "body", "x", "y", "z", "vx", "vy", "vz",
-                             "wx", "wy", "wz", "active"])
+                             "wx", "wy", "wz", "qw", "qx", "qy", "qz", "active"])
             for t, time in enumerate(self.times):
                 for body in range(self.positions.shape[1]):
                     writer.writerow([repr(float(time)), body,
                                      *map(repr, self.positions[t, body].tolist()),
                                      *map(repr, self.velocities[t, body].tolist()),
                                      *map(repr, self.angular_velocities[t, body].tolist()),
+                                     *map(repr, self.orientations[t, body].tolist()),
                                      int(self.active[t, body])])
 
 

@@ -3,7 +3,8 @@
 Everything the simulation knows is an attribute a student can print: ``world.position`` is an
 (N, 3) array of centres, ``world.velocity`` their velocities, and so on. A step is the four
 stages of integrators.py written out in `World.step`, followed by the continuous collision
-test, the push-out of overlaps, and the removal of bodies that leave the bounds.
+tests (continuous.py for spheres, solid_sweeps.py for boxes and capsules), the push-out of
+overlaps, and the removal of bodies that leave the bounds.
 """
 
 from __future__ import annotations
@@ -23,9 +24,10 @@ from physics.colliders import MAX_SHAPE_CONTACTS
 from physics.impulses import SolverBodies
 from physics.integrators import INTEGRATORS, integrate_velocities, parabola_start_velocity
 from physics.point_solver import PointBodies, solve_points
-from physics.quaternions import rotate_orientations
-from physics.solid_contacts import (PointContacts, find_solid_contacts, join_point_contacts,
-                                    sphere_point_contacts, with_levers)
+from physics.quaternions import rotate_orientations, rotation_vector_between
+from physics.solid_contacts import (PointContacts, contact_reach, find_solid_contacts,
+                                    join_point_contacts, sphere_point_contacts, with_levers)
+from physics.solid_sweeps import Sweep, lever, stop_solid_sweeps, sweep_solids
 from physics.solids import (BOX, CAPSULE, KIND_NAMES, SPHERE, free_rotation, principal_inertia,
                             volume, world_inertia, world_inverse_inertia)
 from physics.solvers import SOLVERS, contact_keys, separate_overlaps, warm_start
@@ -400,7 +402,9 @@ class World:
         Afterwards ``world.work`` (a collections.Counter) says what the last step did:
         ``"pairs examined"`` by the broad phase (contacts and swept test), ``"contacts"``,
         ``"collision sweeps"`` and ``"resting passes"`` (each at most ``iterations``),
-        ``"solver levels"`` (sequential solver) and ``"push-out passes"`` (one). Inside a
+        ``"solver levels"`` (sequential solver), ``"push-out passes"`` (one) and, with boxes
+        or capsules, ``"sweep advances"`` (conservative-advancement evaluations of the swept
+        test, solid_sweeps.py). Inside a
         crowd of overlapping spheres the broad phase pairs each sphere with a bounded number of
         neighbours (broadphase.py), so every one of these counts grows at most linearly with
         the number of spheres.
@@ -445,8 +449,11 @@ class World:
         gravity_part = np.where(contacts.static, h * dot(contacts.normal, self.gravity), 0)
         keys = contact_keys(contacts, n, len(self.plane_offset), len(self.shapes))
         order = np.argsort(keys, kind="stable")
-        solid_contacts = (find_solid_contacts(self, shapes, MAX_SHAPE_CONTACTS) if len(solids)
-                          else ())
+        # Each box's and capsule's contacts reach a few slops at most; the swept test after
+        # step 4 finds what it meets beyond that (solid_contacts.contact_reach).
+        reach = contact_reach(self) if len(solids) else None
+        solid_contacts = (find_solid_contacts(self, shapes, MAX_SHAPE_CONTACTS, reach)
+                          if len(solids) else ())
         if len(solid_contacts) == 0:
             warm = warm_start(keys, self._resting_impulses, self.dtype)
             collisions = SOLVERS[self.solver](bodies, contacts, gravity_part.astype(self.dtype),
@@ -466,15 +473,16 @@ class World:
         turn = scheme.positions(np.zeros_like(spin), self.angular_velocity, spin, h)
         q_old = self.orientation
         self.orientation = rotate_orientations(self.orientation, turn)
+        momentum = np.zeros_like(spin)
         if len(solids):
             # Free flight keeps the angular momentum L = I_world w, not w: a box or capsule
             # turns with its L by the splitting of solids.free_rotation, whatever the
             # integrator, and its new w is L through its inertia where it now points.
             principal = self.principal_inertia[solids]
-            momentum = np.einsum("nij,nj->ni", world_inertia(q_old[solids], principal),
-                                 spin[solids])
+            momentum[solids] = np.einsum("nij,nj->ni", world_inertia(q_old[solids], principal),
+                                         spin[solids])
             self.orientation[solids], spin[solids] = free_rotation(q_old[solids], principal,
-                                                                   momentum, h)
+                                                                   momentum[solids], h)
 
         # Continuous collision: bounce off planes and shapes reached during the step ...
         touching = np.zeros((n, len(self.plane_offset)), bool)
@@ -494,6 +502,11 @@ class World:
                           - (scheme.weight - 0.5) * h * end_acceleration[bounced])
         # ... and stop spheres at their first touch with another.
         stop_sphere_sweeps(x_old, x_new, self.radius, self.spheres, self.slop, work)
+        # ... and sweep the boxes and capsules (solid_sweeps.py).
+        solid_hits = []
+        if len(solids):
+            solid_hits = self._sweep_solids(shapes, x_old, q_old, x_new, v_new, spin, momentum,
+                                            reach, h, work)
 
         # One push-out pass a step, never more: it removes ``push_out`` of each overlap.
         separate_overlaps(x_new, solved, bodies.inverse_mass, self.slop, self.push_out)
@@ -502,8 +515,71 @@ class World:
 
         self.position, self.velocity, self.angular_velocity = x_new, v_new, spin
         self.steps += 1
-        self._record(solved, collisions, hits)
+        self._record(solved, collisions, hits, solid_hits)
         self._remove_out_of_bounds()
+
+    def _sweep_solids(self, shapes, x_old, q_old, x_new, v_new, spin, momentum, reach, h,
+                      work) -> list:
+        """The swept test of the boxes and capsules (solid_sweeps.py): updates ``x_new``,
+        ``v_new``, ``spin`` and the orientations in place and returns the events.
+
+        Over the step a body's centre goes from x_n to x_{n+1} on the parabola of gravity
+        alone, x(t) = x_n + t u + t^2 g / 2 with u = (x_{n+1} - x_n) / h - h g / 2: the
+        solver's impulses change its velocity at the start of the step, and only gravity
+        acts during it. (The sphere test of continuous.py spreads the impulses over the step
+        as an acceleration; a box's impact impulses are large, and spread out they would
+        meet a wall at the wrong speed.) A body is swept against the planes and shapes when
+        it could move a point of it farther than its contact reach:
+        L (h max(|u|, |u + h g|) + |r| l) > reach, with L the shapes' largest Lipschitz bound,
+        r its turn over the step and l its `lever`. Then every body that moved is swept
+        against the others, where one of the two is a box or capsule.
+        """
+        solids = np.flatnonzero(self.active & (self.kind != SPHERE))
+        acceleration = np.broadcast_to(self.gravity, x_new.shape)
+        u = (x_new - x_old) / h - (0.5 * h) * acceleration
+        turn = rotation_vector_between(q_old[solids], self.orientation[solids])
+        end = u[solids] + h * acceleration[solids]
+        speed = np.maximum(np.sqrt(dot(u[solids], u[solids])), np.sqrt(dot(end, end)))
+        lipschitz = max([1.0] + [shape.lipschitz for shape in shapes])
+        moves = lipschitz * (h * speed + np.sqrt(dot(turn, turn)) * lever(self)[solids])
+        fast = moves > reach[solids]
+        displacement = x_new - x_old
+        if not fast.any() and not np.any(np.sqrt(dot(displacement, displacement))[self.active]
+                                         > reach[self.active]):
+            return []               # nothing moves farther than its contacts reach: at rest
+        rows = solids[fast]
+        events = []
+        # When (s into the step), where and how turned each body first met a plane or shape;
+        # and how each would have ended the step had it met none.
+        impact = (np.full(self.count, np.inf, self.dtype), x_new.copy(),
+                  self.orientation.copy())
+        unswept = (x_new.copy(), self.orientation.copy(), v_new.copy(), spin.copy())
+        if len(rows) and len(self.plane_offset) + len(shapes):
+            sweep = Sweep(body=rows, start=x_old[rows], velocity=u[rows],
+                          acceleration=acceleration[rows], orientation=q_old[rows],
+                          turn=turn[fast], end_orientation=self.orientation[rows],
+                          end_spin=spin[rows], momentum=momentum[rows],
+                          duration=np.full(len(rows), h, self.dtype))
+            moved, events = sweep_solids(self, shapes, sweep, reach, h, work)
+            changed, position, velocity, end_acceleration, orientation, new_spin = moved[:6]
+            body = rows[changed]                    # (changed: rows of the sweep)
+            for where, value in zip(impact, moved[6:]):
+                where[body] = value
+            x_new[body] = position
+            self.orientation[body] = orientation
+            spin[body] = new_spin
+            # The velocity the integrator needs to carry on along the new parabola.
+            v_new[body] = (velocity - (INTEGRATORS[self.integrator].weight - 0.5) * h
+                           * end_acceleration)
+        _, undone = stop_solid_sweeps(self, x_old, q_old, x_new, self.orientation, reach,
+                                      impact, unswept[:2], work)
+        # A body that met a surface through another it rode on goes on as if it had not.
+        v_new[undone], spin[undone] = unswept[2][undone], unswept[3][undone]
+        kept = []
+        for kind, body, other, speed, impulse in events:
+            keep = ~undone[body]
+            kept.append((kind[keep], body[keep], other[keep], speed[keep], impulse[keep]))
+        return kept
 
     def _solve_at_points(self, bodies, sphere_contacts, solid_contacts, h, work):
         """Solve every contact at its point (point_solver.py); ``bodies`` gets the result.
@@ -532,7 +608,7 @@ class World:
         work["contacts"] = len(every)
         return every, collisions
 
-    def _record(self, contacts, collisions, hits) -> None:
+    def _record(self, contacts, collisions, hits, solid_hits=()) -> None:
         # Point contacts hold their kinds and others as arrays; sphere contacts derive them.
         at_points = isinstance(contacts, PointContacts)
         kinds = contacts.kind if at_points else contacts.kind()
@@ -544,6 +620,8 @@ class World:
             self._add_events(np.where(static < planes, "sphere-plane", "sphere-shape"), body,
                              np.where(static < planes, static, static - planes), approach,
                              impulse)
+        for kind, body, other, approach, impulse in solid_hits:
+            self._add_events(kind, body, other, approach, impulse)
 
     def _add_events(self, kind, body, other, speed, impulse) -> None:
         self._events.append(make_events(self.steps, self.time, kind, body, other, speed,

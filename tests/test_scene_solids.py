@@ -120,12 +120,14 @@ def stack_rows(tmp_path_factory):
         return reader.fieldnames, list(reader)
 
 
-def test_stack_csv_has_the_sphere_columns_and_one_row_per_body_per_record(stack_rows):
+def test_stack_csv_has_the_pose_columns_and_one_row_per_body_per_record(stack_rows):
     header, rows = stack_rows
     scene = marchlab.load_scene("stack")
     assert [body.shape for body in scene.bodies] == ["box"] * 5 + ["capsule", "sphere"]
     assert header == ["time", "body", "x", "y", "z", "vx", "vy", "vz", "wx", "wy", "wz",
-                      "active"]
+                      "qw", "qx", "qy", "qz", "active"]
+    quaternions = np.array([[float(row[k]) for k in ("qw", "qx", "qy", "qz")] for row in rows])
+    np.testing.assert_allclose(np.linalg.norm(quaternions, axis=1), 1.0, atol=1e-12)
     records = round(STACK_SECONDS * STACK_FPS) + 1
     assert len(rows) == records * len(scene.bodies)
     assert [int(row["body"]) for row in rows] == list(range(len(scene.bodies))) * records

@@ -145,6 +145,7 @@ def test_trajectory_csv_has_one_row_per_record_and_sphere(tmp_path):
     assert len(lines) == 1 + len(trajectory.times)
     last = [float(v) for v in lines[-1].split(",")]
     assert last[2:5] == trajectory.positions[-1, 0].tolist()
+    assert last[11:15] == trajectory.orientations[-1, 0].tolist()      # qw, qx, qy, qz
 
 
 def test_spinning_ball_orientation_turns_by_omega_t_within_1e_12():
