@@ -16,6 +16,7 @@ import sys
 import warnings
 
 from scene_model.camera import MAX_SIDE
+from scene_model.camera_paths import PRESETS
 from scene_model.errors import MarchlabError
 from scene_model.frame import AOVS
 
@@ -48,6 +49,10 @@ def add_animation_parser(sub, name: str, func, text: str) -> None:
                    help="renderer (default: gpu if it can run here, else numpy)")
     p.add_argument("--mark-lights", action="store_true",
                    help="mark each point and spot light the camera sees with a small dot")
+    p.add_argument("--camera-path", choices=PRESETS, default=None,
+                   help="move the camera over the animation: once round what it looks at "
+                        "(turntable), half way in and back (dolly), up and back down "
+                        "(crane), or past it from left to right (flyby)")
     p.add_argument("--csv", metavar="FILE",
                    help="also write the trajectory: one row per frame and body")
     p.add_argument("--save-state", metavar="FILE",

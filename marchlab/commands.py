@@ -259,6 +259,13 @@ def animate_scene(args, need_bodies: bool) -> int:
     state = Path(args.save_state) if args.save_state else None
     check_outputs(files=[output, table, state])
     scene = load_scene(args.scene, args.set)
+    if args.camera_path:
+        from scene_model.camera_paths import camera_path
+        try:
+            scene = camera_path(scene, args.camera_path, args.seconds)
+        except SceneError as err:
+            raise MarchlabError(f"{args.scene}: --camera-path {args.camera_path}: "
+                                f"{err}") from None
     if need_bodies and not scene.bodies:
         raise MarchlabError(f"{args.scene}: has no [[bodies]] to simulate (marchlab animate "
                             "renders a scene without them)")
