@@ -214,7 +214,8 @@ class _Generator:
         self.fog = self.s.fog.density > 0 and self.s.shading in LIT_MODES
         # The objects' shading models: one for all (`model`), or several chosen per object
         # by a material row (`shade_surface`, glsl/pipeline/shade_surface.glsl).
-        models = shading_modes(scene) or [self.s.shading]
+        self.object_models = shading_modes(scene)           # one per primitive
+        models = self.object_models or [self.s.shading]
         self.models = sorted(set(models), key=models.index)
         self.model = self.models[0]
         self.mixed = self.s.shading in LIT_MODES and (len(self.models) > 1
@@ -417,7 +418,7 @@ class _Generator:
         ``MATERIAL(id, row)``, which reads them by object id, and ``surface_albedo``."""
         stride = 2 + 2 * self.checker + 2 * self.glass + self.mixed + 3 * self.textured
         first = len(self.block.rows)
-        for k, (m, model) in enumerate(zip(self.materials, shading_modes(self.scene))):
+        for k, (m, model) in enumerate(zip(self.materials, self.object_models)):
             self.block.row([*m.color, m.ka])
             self.block.row([m.kd, m.ks, m.shininess, m.kr])
             if self.checker:
