@@ -159,7 +159,8 @@ def serve(backend: str, requests=None, answers=None) -> None:
         # The cache that matters is the driver's: this context's copy is not used again.
         for gl_object in reversed(renderer.programs.pop(
                 (program.vertex_source, program.source), ())):
-            gl_object.release()
+            if gl_object is not None:             # a compute program has no vertex array
+                gl_object.release()
         print(digest(program), file=answers, flush=True)
 
 

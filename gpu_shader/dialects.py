@@ -6,12 +6,14 @@ no ``out`` parameters, structs only declared here, ``abs``/``min``/``max``/``cla
 ``reflect`` and the other functions both languages know. A dialect says how to spell the few
 things that differ: the prelude that gives the types and functions their meaning, struct
 declarations, number literals, conversions, how the program receives its parameters and
-which entry point file ends it. Two dialects: GLSL (the gpu backend) and OpenCL C (the
-opencl backend, float32 or float64).
+which entry point file ends it. The dialects: GLSL as a fragment shader and GLSL as a
+compute shader (the gpu backend draws with either: `gpu_shader.render`), and OpenCL C (the
+opencl backend, float32 or float64; one ray or one packet of rays per work-item).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import re
 from dataclasses import dataclass
 from typing import Callable
@@ -67,6 +69,7 @@ class Dialect:
     # How the program reads its texture atlas (glsl/texture.glsl), given the number of
     # parameter rows and the atlas's width: TEXEL(column, row) and what it reads from.
     texels: Callable[[int, int], str] = lambda first, width: ""
+    compute: bool = False                         # GLSL: a compute shader (else fragment)
 
     def library(self, name: str):
         """The building blocks ``glsl/<name>.glsl`` (a packet program derives its own from
@@ -192,6 +195,45 @@ GLSL = Dialect(
     real_dtype=np.dtype(np.float32),
     entry="main.frag",
     prepass_entry="prepass.frag",
+)
+
+
+# The work group of the compute entry points (glsl/main.comp, glsl/prepass.comp): 8 x 8
+# pixels, as llvmpipe's fragment stage shades 8 x 8 blocks and a GPU schedules 32 or 64 lanes.
+GROUP_SIZE = 8
+
+
+def _glsl_compute_parameters(rows: int, fixed: int, flat_rows: int) -> str:
+    """The uniform block U, which is P too: a compute shader has no flat varyings."""
+    return _UNIFORM_BLOCK.format(rows=rows) + f"""
+// The first {fixed} rows are read with fixed indices (camera, settings, SDF tree, lights),
+// straight from the uniform block: a GPU reads it with constant indices from its constant
+// cache, one value for all the lanes. (A copy into the work group's shared memory needs a
+// barrier, which made llvmpipe's compute shader 25 times slower; llvmpipe draws fragments,
+// `gpu_shader.render.default_stage`.)
+#define P U
+
+void load_parameters()
+{{
+}}
+"""
+
+
+# The same GLSL as a compute shader (OpenGL 4.3): one invocation per pixel, writing the three
+# planes as images. On a GPU whose graphics units are few (an NVIDIA H100 shades fragments on
+# a handful of its 132 multiprocessors) it runs on all of them; docs/performance.md measures
+# both stages.
+GLSL_COMPUTE = dataclasses.replace(
+    GLSL,
+    name="glsl-compute",
+    prelude=GLSL.prelude.replace("#version 330 core", "#version 430 core")
+    .replace("#define real float\n",
+             f"#define real float\n#define GROUP_SIZE {GROUP_SIZE}\n"),
+    declare_parameters=_glsl_compute_parameters,
+    vertex_shader=lambda rows, fixed, flat_rows: "",
+    entry="main.comp",
+    prepass_entry="prepass.comp",
+    compute=True,
 )
 
 
@@ -357,11 +399,12 @@ OPENCL = {"float32": _opencl("float", np.float32), "float64": _opencl("double", 
 OPENCL_PACKETS = {"float32": _opencl("float", np.float32, packets=True),
                   "float64": _opencl("double", np.float64, packets=True)}
 
-DIALECTS = {"glsl": {"float32": GLSL}, "opencl": OPENCL, "opencl-packets": OPENCL_PACKETS}
+DIALECTS = {"glsl": {"float32": GLSL}, "glsl-compute": {"float32": GLSL_COMPUTE},
+            "opencl": OPENCL, "opencl-packets": OPENCL_PACKETS}
 
 
 def dialect(name: str, precision: str = "float32") -> Dialect:
-    """The dialect ``name`` ("glsl" or "opencl") at ``precision`` ("float32", "float64")."""
+    """The dialect ``name`` (a key of `DIALECTS`) at ``precision`` ("float32", "float64")."""
     if name not in DIALECTS:
         raise KeyError(f"unknown shader dialect {name!r} (one of: {', '.join(DIALECTS)})")
     if precision not in DIALECTS[name]:

@@ -98,6 +98,10 @@ class Program:
         map's texels and the textured materials' images (`scene_model.textures.texture_atlas`),
         RGB and a 0; None where the program reads none. GLSL: the RGBA32F
         texture ``texels``; OpenCL: R W rows appended to the parameter buffer.
+    compute : bool
+        GLSL: ``source`` and ``prepass_source`` are compute shaders (the "glsl-compute"
+        dialect, glsl/main.comp), dispatched one invocation per pixel (per tile), rather than
+        fragment shaders drawn over the frame.
     """
     source: str
     parameters: np.ndarray
@@ -107,6 +111,7 @@ class Program:
     prepass_tile: int = 0
     prepass_source: str = ""
     texels: np.ndarray | None = None
+    compute: bool = False
 
     def tiles(self, width: int, height: int) -> tuple[int, int]:
         """(columns, rows) of pre-pass tiles of a width x height image."""
@@ -118,8 +123,9 @@ def generate(scene: Scene, width: int, height: int, dialect: str = "glsl",
              path_labels: bool = False) -> Program:
     """Generate the program that renders ``scene`` at ``width`` x ``height``.
 
-    ``dialect`` is "glsl" (a fragment shader), "opencl" (a kernel, one ray per work-item)
-    or "opencl-packets" (a kernel, one packet of rays per work-item); ``precision`` the
+    ``dialect`` is "glsl" (a fragment shader), "glsl-compute" (the same as a compute shader),
+    "opencl" (a kernel, one ray per work-item) or "opencl-packets" (a kernel, one packet of
+    rays per work-item); ``precision`` the
     meaning of ``real`` ("float64" only in OpenCL). In GLSL, up to ``flat_rows`` parameter
     rows read with fixed indices reach the fragment shader as flat varyings (the context's
     GL_MAX_VARYING_VECTORS at most). ``path_labels`` makes the program compute each pixel's
@@ -257,7 +263,7 @@ class _Generator:
                        tuple(sorted(self.features)),
                        self.d.vertex_shader(rows, fixed, self.flat_rows), self.path_labels,
                        self.prepass_tile, assemble(prepass_parts) if prepass_parts else "",
-                       self.texels)
+                       self.texels, self.d.compute)
 
     def entry(self, name: str) -> tuple[str, str]:
         """The section of the entry point ``glsl/<name>``."""

@@ -5,12 +5,22 @@ steps, object id and path label in RGBA32I); reading them back gives the same `F
 NumPy reference returns. With the cone pre-pass (``render.prepass = "cone"``) a first draw
 writes each tile's start into a small R32F texture, which the frame's draw reads.
 GL row r holds image row r counted from the top, so the read-back needs no flip.
+
+The same program runs in one of two shader stages (`STAGES`): as a fragment shader drawn over
+the frame (OpenGL 3.3), or as a compute shader dispatched one invocation per pixel that
+stores into the same textures (OpenGL 4.3; the "glsl-compute" dialect). They compute the same
+pixels with the same code (tests/gpu/test_compute_stage.py). Which is faster depends on the
+device: an NVIDIA H100 shades fragments on a few of its multiprocessors only, and llvmpipe
+(docs/performance.md, "Fragment or compute"). ``MARCHLAB_GPU_STAGE`` chooses; by default
+`default_stage`.
 Programs are cached by their text, which depends only on the scene's structure: a new
 camera or a moved object only rewrites the parameter buffer.
 """
 
 from __future__ import annotations
 
+import math
+import os
 import re
 from collections import OrderedDict
 from typing import Callable
@@ -21,8 +31,8 @@ from scene_model.errors import MarchlabError
 from scene_model.frame import Frame
 from scene_model.scene import Scene
 
-from .context import gl_context, renderer_name
-from .dialects import MAX_FLAT_ROWS
+from .context import gl_context, is_software, renderer_name
+from .dialects import GROUP_SIZE, MAX_FLAT_ROWS
 from .generate import Program, generate
 from .library import glsl_file
 from .planes import frame_from_planes, row_bands
@@ -31,6 +41,8 @@ PROGRAM_CACHE_SIZE = 32
 TARGET_CACHE_SIZE = 8       # sizes kept (a live view draws at a few reduced ones)
 ATLAS_CACHE_SIZE = 4        # texture atlases kept (environments recently drawn)
 ATLAS_UNIT = 1              # the texture unit of the atlas (the cone pre-pass's starts use 0)
+STAGES = ("fragment", "compute")
+ENV_STAGE = "MARCHLAB_GPU_STAGE"
 
 
 class ShaderCompileError(MarchlabError):
@@ -43,8 +55,9 @@ def check() -> None:
 
 
 def device_name() -> str:
-    """The OpenGL renderer the backend draws with."""
-    return renderer_name(gl_context())
+    """The OpenGL renderer the backend draws with, and its shader stage (`default_stage`),
+    e.g. 'llvmpipe (LLVM 15.0.6, 256 bits), fragment shader'."""
+    return f"{renderer_name(gl_context())}, {_renderer().stage} shader"
 
 
 def render(scene: Scene, width: int, height: int, precision: str = "float32",
@@ -61,6 +74,21 @@ def render_program(scene: Scene, program: Program, width: int, height: int) -> F
     return _renderer().render_program(scene, program, width, height)
 
 
+def default_stage(ctx) -> str:
+    """The shader stage the gpu backend draws with on ``ctx``: ``MARCHLAB_GPU_STAGE`` where
+    set; else "compute" on a hardware device with OpenGL 4.3, "fragment" otherwise
+    (llvmpipe, and OpenGL 4.1 on macOS). Measured in docs/performance.md."""
+    chosen = os.environ.get(ENV_STAGE, "").strip()
+    if chosen:
+        if chosen not in STAGES:
+            raise MarchlabError(f"{ENV_STAGE}={chosen!r}: expected one of {', '.join(STAGES)}")
+        if chosen == "compute" and ctx.version_code < 430:
+            raise MarchlabError(f"{ENV_STAGE}=compute: compute shaders need OpenGL 4.3; "
+                                f"{renderer_name(ctx)} has {ctx.version_code / 100:.1f}")
+        return chosen
+    return "compute" if ctx.version_code >= 430 and not is_software(ctx) else "fragment"
+
+
 _renderers: dict[int, "Renderer"] = {}
 
 
@@ -74,8 +102,9 @@ def _renderer() -> "Renderer":
 class Renderer:
     """Compiled programs and render targets on one context."""
 
-    def __init__(self, ctx):
+    def __init__(self, ctx, stage: str | None = None):
         self.ctx = ctx
+        self.stage = stage or default_stage(ctx)
         self.programs: OrderedDict[tuple[str, str], tuple] = OrderedDict()
         self.targets: OrderedDict[tuple[int, int], object] = OrderedDict()
         self.start_targets: OrderedDict[tuple[int, int], object] = OrderedDict()
@@ -85,9 +114,15 @@ class Renderer:
 
     def render(self, scene: Scene, width: int, height: int, progress=None,
                path_labels: bool = False) -> Frame:
-        program = generate(scene, width, height, flat_rows=self.flat_rows,
-                           path_labels=path_labels)
+        program = self.generate(scene, width, height, path_labels)
         return self.render_program(scene, program, width, height, progress)
+
+    def generate(self, scene: Scene, width: int, height: int,
+                 path_labels: bool = False) -> Program:
+        """`gpu_shader.generate.generate` of ``scene`` for this renderer's `stage`."""
+        return generate(scene, width, height,
+                        dialect="glsl-compute" if self.stage == "compute" else "glsl",
+                        flat_rows=self.flat_rows, path_labels=path_labels)
 
     def render_program(self, scene: Scene, generated: Program, width: int, height: int,
                        progress=None) -> Frame:
@@ -112,7 +147,8 @@ class Renderer:
             raise MarchlabError(
                 f"the scene needs {parameters.nbytes} bytes of shader parameters; this OpenGL "
                 f"allows {self.max_block} in a uniform block (fewer objects or lights)")
-        program, vao = self._program(generated.source, generated.vertex_source)
+        program, vao = self._program(generated.source, generated.vertex_source,
+                                     generated.compute)
         fbo = self.target(width, height)
         buffer = self.ctx.buffer(parameters.tobytes())
         try:
@@ -126,9 +162,15 @@ class Renderer:
             if generated.texels is not None and sampler is not None:
                 self.atlas(generated.texels).use(location=ATLAS_UNIT)
                 sampler.value = ATLAS_UNIT
-            fbo.use()
-            fbo.viewport = (0, 0, width, height)
-            self.draw(vao, width, height, progress)
+            if generated.compute:
+                for unit, texture in enumerate(fbo.color_attachments):
+                    texture.bind_to_image(unit, read=False, write=True)
+                program["frame_size"].value = (width, height)
+                self.dispatch(program, width, height, progress)
+            else:
+                fbo.use()
+                fbo.viewport = (0, 0, width, height)
+                self.draw(vao, width, height, progress)
         finally:
             buffer.release()
         return fbo
@@ -136,11 +178,19 @@ class Renderer:
     def _draw_starts(self, generated: Program, width: int, height: int):
         """Draw the cone pre-pass of ``generated`` (its parameter block already bound) into
         the tile-start target of a width x height frame; return that framebuffer."""
-        program, vao = self._program(generated.prepass_source, generated.vertex_source)
+        program, vao = self._program(generated.prepass_source, generated.vertex_source,
+                                     generated.compute)
         program["Parameters"].binding = 0
         columns, rows = generated.tiles(width, height)
         starts = self._cached(self.start_targets, (columns, rows), lambda: [
             self.ctx.texture((columns, rows), 1, dtype="f4")])
+        if generated.compute:
+            starts.color_attachments[0].bind_to_image(0, read=False, write=True)
+            program["tiles"].value = (columns, rows)
+            program.run(math.ceil(columns / GROUP_SIZE), math.ceil(rows / GROUP_SIZE))
+            # The frame's dispatch reads the starts with texelFetch.
+            self.ctx.memory_barrier(self.ctx.TEXTURE_FETCH_BARRIER_BIT)
+            return starts
         starts.use()
         starts.viewport = (0, 0, columns, rows)
         vao.render(vertices=3)
@@ -191,27 +241,47 @@ class Renderer:
             progress(stop * width, height * width)
         self.ctx.scissor = None
 
-    def program(self, source: str, vertex: str = ""):
-        """The compiled program for a fragment shader ``source`` and its ``vertex`` shader
-        ("" for the plain full-screen triangle), from the cache when seen before."""
-        with self.ctx:           # a `with` does not nest: exiting restores the previous one
-            return self._program(source, vertex)
+    def dispatch(self, program, width, height, progress):
+        """Run the compute ``program`` over a width x height frame, in bands of rows with
+        ``progress`` as `draw` does; the images it stored are then ready to be sampled,
+        drawn from and read back."""
+        first = program.get("first_row", None)
+        bands = [(0, height)] if progress is None else row_bands(height, progress)
+        for start, stop in bands:
+            if first is not None:
+                first.value = start
+            program.run(math.ceil(width / GROUP_SIZE), math.ceil((stop - start) / GROUP_SIZE))
+            if progress is not None:
+                self.ctx.finish()
+                progress(stop * width, height * width)
+        self.ctx.memory_barrier(self.ctx.ALL_BARRIER_BITS)
 
-    def _program(self, source: str, vertex: str = ""):
+    def program(self, source: str, vertex: str = "", compute: bool = False):
+        """The compiled program for a fragment shader ``source`` and its ``vertex`` shader
+        ("" for the plain full-screen triangle), or for a ``compute`` shader ``source``
+        (its vertex array None), from the cache when seen before."""
+        with self.ctx:           # a `with` does not nest: exiting restores the previous one
+            return self._program(source, vertex, compute)
+
+    def _program(self, source: str, vertex: str = "", compute: bool = False):
         key = (vertex, source)
         if key in self.programs:
             self.programs.move_to_end(key)
             return self.programs[key]
-        vertex = vertex or glsl_file("fullscreen.vert")
         try:
-            program = self.ctx.program(vertex_shader=vertex, fragment_shader=source)
+            if compute:
+                program, vao = self.ctx.compute_shader(source), None
+            else:
+                program = self.ctx.program(vertex_shader=vertex or glsl_file("fullscreen.vert"),
+                                           fragment_shader=source)
+                vao = self.ctx.vertex_array(program, [])
         except Exception as err:
             raise ShaderCompileError(compile_message(str(err), source)) from None
-        vao = self.ctx.vertex_array(program, [])
         self.programs[key] = (program, vao)
         if len(self.programs) > PROGRAM_CACHE_SIZE:
             _, (old, old_vao) = self.programs.popitem(last=False)
-            old_vao.release()
+            if old_vao is not None:
+                old_vao.release()
             old.release()
         return program, vao
 
@@ -239,6 +309,7 @@ class Renderer:
 
 # Driver messages name lines as "0:123(4): error" (Mesa) or "0(123) : error" (NVIDIA).
 _LINE = re.compile(r"\b0[:(](\d+)[(): ]")
+_END = re.compile(r"\$end|<EOF>|end of file", re.IGNORECASE)
 
 
 def compile_message(log: str, source: str) -> str:
@@ -251,6 +322,11 @@ def compile_message(log: str, source: str) -> str:
         number = int(match.group(1))
         if 1 <= number <= len(lines):
             quoted.append(f"  line {number}: {lines[number - 1].strip()}")
+    if not quoted and _END.search(first) and lines:
+        # An error at the end of the text: NVIDIA's compiler names no line ("(0) : error
+        # C0000: syntax error, unexpected $end ... at token "<EOF>""); quote the last one.
+        number = max(i for i, line in enumerate(lines, 1) if line.strip() or i == 1)
+        quoted.append(f"  line {number}: {lines[number - 1].strip()}")
     return ("generated shader failed to compile: " + first
             + ("\n" + "\n".join(quoted) if quoted else "")
             + "\n(`marchlab shader SCENE --numbered` prints the source with line numbers)")

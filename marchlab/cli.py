@@ -188,8 +188,10 @@ def build_parser() -> Parser:
 
     p = sub.add_parser("shader", help="print the shader generated for a scene")
     p.add_argument("scene", help="bundled scene name or a .toml path")
-    p.add_argument("--dialect", default="glsl", choices=["glsl", "opencl", "opencl-packets"],
-                   help="glsl (the gpu backend's fragment shader), opencl (the same as an "
+    p.add_argument("--dialect", default="glsl",
+                   choices=["glsl", "glsl-compute", "opencl", "opencl-packets"],
+                   help="glsl (the gpu backend's fragment shader), glsl-compute (the same as "
+                        "the compute shader it runs on a hardware GPU), opencl (the same as an "
                         "OpenCL kernel, one ray per work-item) or opencl-packets (the kernel "
                         "the opencl backend runs: 16 rays per work-item as vectors); "
                         "default: glsl")

@@ -95,12 +95,11 @@ class ViewDrawer:
         return not self.compiler.ready(program)
 
     def _generate(self, scene, size):
-        """`gpu_shader.generate.generate` of the view (the last one kept: while a program
+        """The renderer's program of the view (`gpu_shader.render.Renderer.generate`, in the
+        renderer's shader stage; the last one kept: while a program
         compiles elsewhere, each frame asks for the same one again)."""
-        from gpu_shader.generate import generate
         if self._generated[:2] != (scene, size):
-            self._generated = (scene, size, generate(scene, *size,
-                                                     flat_rows=self.renderer.flat_rows))
+            self._generated = (scene, size, self.renderer.generate(scene, *size))
         return self._generated[2]
 
     def _draw(self, scene, size, program, viewer: Viewer) -> None:

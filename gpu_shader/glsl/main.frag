@@ -1,7 +1,9 @@
 {# A template: gpu_shader/generate.py fills in the {{ }} parts (Jinja). #}
+{% from "pipeline/planes.glsl" import pixel_planes %}
 // The fragment shader's entry point: one invocation per pixel. It writes every buffer of a
 // marchlab Frame into three render targets in one draw: two RGBA32F, and one RGBA32I for the
 // integers, which the Frame then uses as they are read back (no conversion per pixel).
+// glsl/main.comp is the same pixel as a compute shader.
 
 layout(location = 0) out vec4 out_color;     // rgb: colour in [0, 1], a: 1 on a hit
 layout(location = 1) out vec4 out_normal;    // xyz: unit normal, w: depth t (inf on a miss)
@@ -21,22 +23,13 @@ void main()
     // reading it back needs no flip.
     real x = gl_FragCoord.x;
     real y = gl_FragCoord.y;
-{% if not samples %}
-    vec3 direction = camera_ray(x, y);
-{% endif %}
 {% if prepass %}
     real start = texelFetch(cone_starts, ivec2(gl_FragCoord.xy) / int(PREPASS_TILE), 0).x;
 {% else %}
     real start = 0.0;
 {% endif %}
-{% if samples %}
-    Pixel px = supersample(x, y, start);      // every ray of the pixel (anti-aliasing)
-{% else %}
-    Pixel px = trace(CAMERA_POSITION, direction, start);
-{% endif %}
-
-    Hit h = px.primary;
-    out_color = vec4(clamp(px.color, 0.0, 1.0), float(h.hit));
-    out_normal = vec4(px.normal, h.hit == 1 ? h.t : INFINITY);
-    out_steps = ivec4(h.steps, px.id, {{ "int(px.path)" if path_labels else "0" }}, 0);
+{{ pixel_planes(path_labels, samples) }}
+    out_color = color_hit;
+    out_normal = normal_depth;
+    out_steps = steps_id;
 }

@@ -109,7 +109,7 @@ def test_moving_an_object_reuses_the_program_and_moves_the_image(gpu):
     first = marchlab.render(left, width, height, backend="gpu")
     after_first = len(programs)
     second = marchlab.render(right, width, height, backend="gpu")
-    program = generate(left, width, height)
+    program = gpu_render._renderer().generate(left, width, height)    # in its shader stage
     assert (program.vertex_source, program.source) in programs
     assert after_first - before in (0, 1)      # 0 if an earlier test compiled this structure
     assert len(programs) == after_first        # the move compiled nothing
@@ -146,6 +146,16 @@ def test_compile_error_quotes_the_broken_line(gpu, marker):
 def test_compile_error_of_one_line_source_quotes_line_1(gpu):
     with pytest.raises(ShaderCompileError, match="line 1: bad source"):
         Renderer(context.gl_context()).program("bad source")
+
+
+def test_compile_error_at_the_end_of_the_text_quotes_the_last_line():
+    """NVIDIA's compiler names no line for an error at the end of the text (as an H100's
+    driver 580 wrote it); the message quotes the last line that is not blank."""
+    log = ('GLSL Compiler failed\n\nfragment_shader\n===============\n(0) : error C0000: '
+           'syntax error, unexpected $end, expecting "::" at token "<EOF>"')
+    message = gpu_render.compile_message(log, "void main()\n{\n    float x = 1.0\n\n")
+    assert "  line 3: float x = 1.0" in message
+    assert "unexpected $end" in message
 
 
 # --- the OpenGL context ------------------------------------------------------------------
@@ -186,7 +196,8 @@ def release(contexts) -> None:
     """Release contexts made by a test, with the programs the backend compiled on them."""
     for renderer in gpu_render._renderers.values():
         for program, vao in renderer.programs.values():
-            vao.release()
+            if vao is not None:                   # a compute program has none
+                vao.release()
             program.release()
     for ctx in contexts:
         ctx.release()

@@ -313,7 +313,8 @@ def test_unknown_node_kind_is_a_one_line_error_naming_it(make_custom_node, where
 
 
 def test_unknown_dialect_is_an_error_listing_the_known_ones():
-    with pytest.raises(MarchlabError, match=r"unknown shader dialect 'hlsl' \(one of: glsl, opencl, opencl-packets\)"):
+    with pytest.raises(MarchlabError, match=r"unknown shader dialect 'hlsl' "
+                       r"\(one of: glsl, glsl-compute, opencl, opencl-packets\)"):
         generate(Scene(objects=(sphere(1.0),)), WIDTH, HEIGHT, dialect="hlsl")
 
 
