@@ -63,6 +63,7 @@ class Gates:
     """The limits a backend must meet against the reference: coverage, interior and display
     (docs/equivalence.md, "The gates")."""
     coverage_fraction: float = 0.0005     # hit flags may differ on at most 0.05% of pixels
+    path_fraction: float = 0.0005         # ... and path labels (near a jump) on at most this
     depth_excess: float = 1.0             # |dt| <= max(2 epsilon, 1e-5 t)
     normal_degrees: float = 0.5
     color: float = 1 / 255
@@ -90,9 +91,10 @@ def failures(c: Comparison, gates: Gates) -> list[str]:
     if c.path_differs_far:
         out.append(f"paths: {c.path_differs_far} pixels saw different surfaces, checker cells or "
                    "shadows more than 1 px from a discontinuity of the reference")
-    if c.path_differs > gates.coverage_fraction * c.pixels:
+    if c.path_differs > gates.path_fraction * c.pixels:
         out.append(f"paths: {c.path_differs} pixels saw different surfaces, checker cells or "
-                   f"shadows (limit {gates.coverage_fraction:.2%})")
+                   f"shadows (limit {gates.path_fraction:.2%} = "
+                   f"{gates.path_fraction * c.pixels:.1f})")
     if not c.depth_excess <= gates.depth_excess:
         out.append(f"interior depth: |dt| reaches {c.depth_excess:.3g} x max(2 epsilon, 1e-5 t)")
     if not c.normal_max_degrees <= gates.normal_degrees:
@@ -113,11 +115,12 @@ def gate_notes(gates: Gates, pixels: int) -> dict[str, str]:
     """Each `Comparison` field's role, for the table ``marchlab compare`` prints: a gate with
     its limit (what `failures` checks) or a trend (measured, never failed)."""
     share = f"{gates.coverage_fraction * pixels:.1f} ({gates.coverage_fraction:.2%} of pixels)"
+    path_share = f"{gates.path_fraction * pixels:.1f} ({gates.path_fraction:.2%} of pixels)"
     notes = {f.name: "trend" for f in fields(Comparison)}
     notes.update(
         pixels="", interior="",
         hit_differs=f"gate: <= {share}", hit_differs_far="gate: 0",
-        path_differs=f"gate: <= {share}", path_differs_far="gate: 0",
+        path_differs=f"gate: <= {path_share}", path_differs_far="gate: 0",
         depth_excess=f"gate: <= {gates.depth_excess:g}",
         normal_max_degrees=f"gate: <= {gates.normal_degrees:g}",
         color_max=f"gate: <= {gates.color:.4g} ({gates.color * 255:.0f}/255)",

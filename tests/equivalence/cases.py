@@ -259,6 +259,14 @@ def studio_panorama(width: int = 128, height: int = 64) -> str:
 # on any pixel (not only near edges): the 0.05% limit on such pixels needs more pixels.
 SIZES = {"steps": (128, 96), "prepass_cone_tile_5": (128, 96)}
 
+# The bundled glass scene sees a busy checker through balls of index 1.5, which magnify it:
+# the band beside each checker edge where float32 rounding can flip a ray's label widens
+# with them (docs/glass.md, "Equivalence"). On an NVIDIA H100 the gpu backend's frame of it
+# with the pre-pass had 4 and 5 such pixels of 6,912, every one within 1 px of a label jump
+# (llvmpipe: 2), against the 3.5 of 0.05%; its path labels may differ on 0.1% of pixels.
+# The gate that no label differs away from a jump is the same for every case.
+PATH_FRACTION = {"scene:glass": 0.001, "scene:glass+prepass": 0.001}
+
 
 def all_cases() -> list[tuple[str, Scene, tuple[int, int]]]:
     """(name, scene, size) for every bundled scene and every feature case."""

@@ -5,7 +5,8 @@ compared with the reference rendered in float32 and in float64, and must pass th
 `marchlab.compare` (Khronos CTS / Firefox reftest practice):
 
 1. coverage: hit flags differ only within 1 px of the reference silhouette, on <= 0.05% of
-   pixels (likewise the path labels, within 1 px of a discontinuity);
+   pixels (likewise the path labels, within 1 px of a discontinuity; 0.1% for the bundled
+   glass scene, `cases.PATH_FRACTION`);
 2. interior (hit in both, 2 px from any edge): |dt| <= max(2 epsilon, 1e-5 t), normals
    within 0.5 degrees, colour within 1/255 of float32 and 2/255 of float64;
 3. display: 8-bit images within 1 level outside the excused pixels.
@@ -16,13 +17,15 @@ test's tmp_path and named in the message.
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
 from marchlab import render
 from marchlab.compare import compare_frames, failures, gates_against, write_difference_images
 
-from .cases import all_cases
+from .cases import PATH_FRACTION, all_cases
 from .conftest import TRENDS, reference_frame
 
 CASES = all_cases()
@@ -39,6 +42,8 @@ def test_backend_matches_reference_within_gates(backend, name, scene, size,
     c = compare_frames(reference, candidate, epsilon=scene.render.epsilon)
     TRENDS.append((name, backend, reference_precision, c.psnr, c.ssim))
     gates = gates_against(reference_precision)
+    if name in PATH_FRACTION:
+        gates = dataclasses.replace(gates, path_fraction=PATH_FRACTION[name])
     failed = failures(c, gates)
     message = ""
     if failed:                      # write the evidence before the assertion reports it

@@ -17,6 +17,7 @@ import dataclasses
 import numpy as np
 import pytest
 
+from gpu_shader.context import gl_context, is_software
 from gpu_shader.render import render_program
 from gpu_shader.uber import (OBJECTS_START, OBJECT_STRIDE, ROWS, SHAPES, SHAPE_ROW,
                              compare_specialised_uber, uber_program)
@@ -32,6 +33,11 @@ VARIANT_SIZE = (64, 48)
 DEPTH_RTOL = 1e-5
 COLOR_ATOL = 1e-4
 NORMAL_ATOL = 1e-5
+# A driver that rounds the two programs' SDF sums differently (NVIDIA's contracts a * b + c
+# into one FMA where no `precise` forbids it) moves an SDF value by an ulp of the coordinates,
+# 4.8e-7 at 4 m, and a central-difference normal by that over its 2 h = 2e-3 (measured on an
+# H100: 5e-5 to 7e-5); llvmpipe compiles both alike and gives the same bits.
+NORMAL_ATOL_HARDWARE = 5e-4
 
 
 def with_settings(scene: Scene, **settings) -> Scene:
@@ -103,7 +109,8 @@ def assert_same_frame(uber, specialised):
     assert np.isinf(uber.depth[~hit]).all()
     depth_error = np.abs(uber.depth[hit] - specialised.depth[hit]) / specialised.depth[hit]
     assert depth_error.max(initial=0.0) <= DEPTH_RTOL, "depth"
-    assert np.abs(uber.normal - specialised.normal).max() <= NORMAL_ATOL, "normal"
+    atol = NORMAL_ATOL if is_software(gl_context()) else NORMAL_ATOL_HARDWARE
+    assert np.abs(uber.normal - specialised.normal).max() <= atol, "normal"
     assert np.abs(uber.color - specialised.color).max() <= COLOR_ATOL, "colour"
 
 
