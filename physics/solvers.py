@@ -131,7 +131,7 @@ def solve_simultaneous(bodies: SolverBodies, contacts, gravity_part, h, threshol
     contacts.
     """
     counter = Counter() if counter is None else counter
-    every = np.arange(len(contacts))
+    every = slice(None)                 # all contacts, as views rather than copies
     collisions = []
     for _ in range(iterations):
         counter["collision sweeps"] += 1
@@ -297,13 +297,14 @@ def _apply_warm_start(bodies, contacts, normal_total, tangent_total):
 
 
 def _rest(bodies, contacts, index, target, k_normal, k_tangent, normal_total, tangent_total):
-    """One resting-contact pass over contacts ``index``: impulses applied, totals updated.
+    """One resting-contact pass over contacts ``index`` (an index array, or a slice: every
+    contact, read without copying): impulses applied, totals updated.
 
     Returns the largest change of relative velocity it caused (m/s), 0 for no contacts.
     """
-    if len(index) == 0:
-        return 0.0
     a, b, n = contacts.a[index], contacts.b[index], contacts.normal[index]
+    if len(a) == 0:
+        return 0.0
     ra, rb = contacts.radius_a[index], contacts.radius_b[index]
     v_rel = relative_velocity(bodies, a, b, n, ra, rb, contacts.surface_velocity[index])
     normal_part, tangent_part = normal_total[index], tangent_total[index]
