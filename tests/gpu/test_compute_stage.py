@@ -17,6 +17,7 @@ import dataclasses
 import numpy as np
 import pytest
 
+from gpu_shader import context as context_module
 from gpu_shader import render as gpu_render
 from gpu_shader.context import gl_context, is_software
 from gpu_shader.generate import generate
@@ -156,3 +157,48 @@ def test_default_stage_is_fragment_on_llvmpipe_and_compute_on_a_hardware_gpu(mon
     expected = "compute" if ctx.version_code >= 430 and not is_software(ctx) else "fragment"
     assert default_stage(ctx) == expected
     assert gpu_render._renderer().stage in ("fragment", "compute")
+
+
+class FakeContext:
+    """What `default_stage` reads of a moderngl context."""
+
+    def __init__(self, version_code: int, renderer: str):
+        self.version_code = version_code
+        self.info = {"GL_RENDERER": renderer}
+
+
+@pytest.mark.parametrize("version, renderer, stage", [
+    (430, "NVIDIA H100 80GB HBM3/PCIe/SSE2", "compute"),
+    (460, "AMD Radeon RX 7900 XTX (radeonsi, navi31, LLVM 17.0.6)", "compute"),
+    (330, "NVIDIA H100 80GB HBM3/PCIe/SSE2", "fragment"),        # no compute shaders
+    (410, "Apple M2", "fragment"),                                # macOS stops at 4.1
+    (450, "llvmpipe (LLVM 15.0.6, 256 bits)", "fragment"),        # measured slower there
+])
+def test_default_stage_follows_the_device(monkeypatch, version, renderer, stage):
+    monkeypatch.delenv(ENV_STAGE, raising=False)
+    assert default_stage(FakeContext(version, renderer)) == stage
+
+
+def test_compute_stage_asked_of_an_opengl_3_3_context_is_a_one_line_error(monkeypatch):
+    monkeypatch.setenv(ENV_STAGE, "compute")
+    with pytest.raises(MarchlabError, match=r"^MARCHLAB_GPU_STAGE=compute: compute shaders "
+                                            r"need OpenGL 4\.3; Apple M2 has 4\.1$"):
+        default_stage(FakeContext(410, "Apple M2"))
+
+
+def test_context_asks_for_opengl_4_3_first_then_takes_what_the_driver_makes():
+    """NVIDIA's EGL makes exactly the version asked for (3.3 by default), so the backend asks
+    for 4.3 first (for the compute stage) and, where that fails, for the driver's default."""
+    calls = []
+
+    class FakeModernGL:
+        @staticmethod
+        def create_standalone_context(**options):
+            calls.append(options)
+            if options.get("require") == 430:
+                raise RuntimeError("eglCreateContext failed (0x3009)")
+            return "a 3.3 context"
+
+    assert context_module._standalone(FakeModernGL, 1) == "a 3.3 context"
+    assert calls == [{"backend": "egl", "device_index": 1, "require": 430},
+                     {"backend": "egl", "device_index": 1}]
