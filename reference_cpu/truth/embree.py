@@ -47,7 +47,16 @@ def scene_frame(meshes: list[Mesh]) -> tuple[np.ndarray, float]:
 
 
 def cast(meshes: list[Mesh], origin, directions, inside_other=None, max_recasts: int = 8):
-    """First hit of each ray with the meshes.
+    """First hit of each ray with the meshes: `cast_triangles` less the triangle indices.
+    """
+    t, normal, part, _, rounding = cast_triangles(meshes, origin, directions, inside_other,
+                                                  max_recasts)
+    return t, normal, part, rounding
+
+
+def cast_triangles(meshes: list[Mesh], origin, directions, inside_other=None,
+                   max_recasts: int = 8):
+    """First hit of each ray with the meshes, and the triangle hit.
 
     Parameters
     ----------
@@ -71,6 +80,8 @@ def cast(meshes: list[Mesh], origin, directions, inside_other=None, max_recasts:
         Unit outward normal of the triangle hit (0 on a miss).
     part : (N,) int ndarray
         Index of the mesh hit (-1 on a miss).
+    triangle : (N,) int ndarray
+        Index of the triangle hit within its mesh (-1 on a miss).
     rounding : (N,) float64 ndarray
         Bound on the float32 rounding of each hit point, `ROUNDING_ULPS` units in the last
         place of its scaled coordinates, in world units (0 on a miss).
@@ -80,12 +91,13 @@ def cast(meshes: list[Mesh], origin, directions, inside_other=None, max_recasts:
     t = np.full(n, np.inf)
     normal = np.zeros((n, 3))
     part = np.full(n, -1)
+    triangle = np.full(n, -1)
     # Embree numbers the meshes it is given 0, 1, ...; an empty mesh (a solid with nothing
     # in it, such as two disjoint shapes intersected) is not given, so map its numbers back.
     given = np.array([i for i, m in enumerate(meshes) if len(m.faces)], dtype=int)
     meshes = [meshes[i] for i in given]
     if not meshes:
-        return t, normal, part, np.zeros(n)
+        return t, normal, part, triangle, np.zeros(n)
     centre, scale = scene_frame(meshes)
     scene = rtcore_scene.EmbreeScene()
     for mesh in meshes:
@@ -110,6 +122,7 @@ def cast(meshes: list[Mesh], origin, directions, inside_other=None, max_recasts:
         geom, prim = found["geomID"][hit], found["primID"][hit]
         t[rays] = start[rays] + found["tfar"][hit].astype(np.float64) / scale
         part[rays] = given[geom]
+        triangle[rays] = prim
         ng = found["Ng"][hit].astype(np.float64)
         ng /= np.sqrt(dot(ng, ng))[:, None]
         # Turn Ng to the outward side: agree with the right-hand normal of the face hit.
@@ -122,7 +135,7 @@ def cast(meshes: list[Mesh], origin, directions, inside_other=None, max_recasts:
         again = inside_other(points, given[geom])
         # Step past the surface by a few float32 units of the scaled scene.
         start[rays[again]] = t[rays[again]] + 64 * FLOAT32_EPS * SCENE_BOX / scale
-        t[rays[again]], part[rays[again]] = np.inf, -1
+        t[rays[again]], part[rays[again]], triangle[rays[again]] = np.inf, -1, -1
         normal[rays[again]] = 0.0
         pending = rays[again]
 
@@ -130,4 +143,4 @@ def cast(meshes: list[Mesh], origin, directions, inside_other=None, max_recasts:
     reach = np.sqrt(dot(hit_points - centre, hit_points - centre))
     rounding = np.where(np.isfinite(t), ROUNDING_ULPS * FLOAT32_EPS * (
         reach + np.sqrt(dot(origin - centre, origin - centre))), 0.0)
-    return t, normal, part, rounding
+    return t, normal, part, triangle, rounding

@@ -1,0 +1,146 @@
+"""The NumPy rasteriser (`reference_cpu.rasterise`): the top-left fill rule draws each pixel
+of a shared edge once, perspective-correct interpolation gives the texture coordinates of
+the exact ray-plane intersection (and screen-linear interpolation does not), clipping at the
+near plane keeps a floor that runs behind the eye, and the picture of a mesh is the picture
+Embree's ray casts of the same triangles give (tests/truth: `test_rasterise_against_embree`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from reference_cpu.rasterise import NEAR, draw_triangle, rasterise
+from scene_model.camera import Camera, camera_rays
+from scene_model.geometry import dot
+from scene_model.meshes import cube, plane, transformed, uv_sphere
+
+CAMERA = Camera(position=(0.0, 1.5, 4.0), look_at=(0.0, 0.0, 0.0), fov=50.0)
+
+
+def coverage_of(triangles, size=(16, 12)):
+    """How many of ``triangles`` (each (3, 2) image corners) cover each pixel (H, W)."""
+    width, height = size
+    count = np.zeros((height, width), int)
+    for corners in triangles:
+        drawn = draw_triangle(np.asarray(corners, float), np.ones(3), size=size)
+        if drawn is not None:
+            (x0, y0), inside, _ = drawn
+            h, w = inside.shape
+            count[y0:y0 + h, x0:x0 + w] += inside
+    return count
+
+
+def test_shared_diagonal_through_pixel_centres_is_drawn_once():
+    """A square split along a diagonal that passes exactly through pixel centres: every
+    centre inside the square is drawn once, none twice, whichever way the square is split."""
+    a, b, c, d = (2.5, 1.5), (12.5, 1.5), (12.5, 11.5), (2.5, 11.5)      # centres on the sides
+    for split in ([(a, b, c), (a, c, d)], [(a, b, d), (b, c, d)]):
+        count = coverage_of(split)
+        assert count.max() == 1
+        # Centres on the square's top and left sides are drawn, on its bottom and right not.
+        expected = np.zeros_like(count)
+        expected[1:11, 2:12] = 1
+        np.testing.assert_array_equal(count, expected)
+
+
+def test_fan_of_triangles_around_a_pixel_centre_draws_it_once():
+    """Eight triangles meeting at a pixel centre (every edge through it): exactly one draws
+    it, as every pixel on their shared edges."""
+    centre = np.array([8.5, 6.5])
+    angles = np.arange(8) * np.pi / 4
+    ring = centre + 5 * np.stack([np.cos(angles), np.sin(angles)], axis=1)
+    ring = np.round(ring * 2) / 2                  # on half-pixels: many centres on edges
+    fan = [(centre, ring[k], ring[(k + 1) % 8]) for k in range(8)]
+    count = coverage_of(fan)
+    assert count[6, 8] == 1
+    assert count.max() == 1
+
+
+def test_closed_mesh_front_faces_cover_its_image_once():
+    raster = rasterise([uv_sphere(1.0, 24, 12)], CAMERA, 80, 60, cull_back_faces=True)
+    assert raster.coverage.max() == 1
+    assert raster.hit.sum() > 400
+    # Without culling the back faces cover the same pixels again: twice each.
+    both = rasterise([uv_sphere(1.0, 24, 12)], CAMERA, 80, 60)
+    assert set(np.unique(both.coverage)) <= {0, 2}
+    np.testing.assert_array_equal(both.depth, raster.depth)
+
+
+def test_perspective_correct_uv_on_a_plane_is_the_ray_plane_intersections():
+    """A large floor seen at a slant: each pixel's uv is where its ray meets the plane (to
+    1e-9), while interpolating uv linearly in the image would be off by up to a tenth."""
+    size, width, height = 8.0, 64, 48
+    raster = rasterise([plane(size, size)], CAMERA, width, height)
+    origin, directions = camera_rays(CAMERA, width, height)
+    t = -origin[1] / directions[..., 1]
+    point = origin + t[..., None] * directions
+    inside = raster.hit & (np.abs(point[..., 0]) < size / 2) & (np.abs(point[..., 2]) < size / 2)
+    assert inside.sum() > 1000
+    u, v = point[..., 0] / size + 0.5, 0.5 - point[..., 2] / size
+    np.testing.assert_allclose(raster.uv[..., 0][inside], u[inside], atol=1e-9)
+    np.testing.assert_allclose(raster.uv[..., 1][inside], v[inside], atol=1e-9)
+    np.testing.assert_allclose(raster.depth[inside], t[inside], rtol=1e-12)
+    # The mistake it avoids: barycentrics of the image used as they are.
+    assert affine_uv_error(plane(size, size), width, height, u, v, inside) > 0.05
+
+
+def affine_uv_error(mesh, width, height, u, v, inside):
+    """Largest |uv error| of screen-linear (not perspective-correct) interpolation."""
+    from scene_model.camera import project
+    image = project(CAMERA, mesh.positions, width, height)[:, :2]
+    worst = 0.0
+    ys, xs = np.nonzero(inside)
+    p = np.stack([xs + 0.5, ys + 0.5], axis=1)
+    for tri in mesh.triangles:
+        a, b, c = image[tri]
+        m = np.array([b - a, c - a]).T
+        coords = np.linalg.solve(m, (p - a).T).T                    # (P, 2): beta, gamma
+        w = np.column_stack([1 - coords.sum(1), coords])
+        mine = np.all(w >= -1e-9, axis=1)
+        uv = w[mine] @ mesh.uvs[tri]
+        error = np.abs(uv - np.column_stack([u[inside][mine], v[inside][mine]]))
+        worst = max(worst, float(error.max(initial=0.0)))
+    return worst
+
+
+def test_near_plane_clips_a_floor_that_runs_behind_the_eye():
+    """A floor far larger than the view passes under and behind the camera: clipped at the
+    near plane, every pixel looking down sees it at the exact ray-plane distance."""
+    width, height = 48, 36
+    floor = plane(200.0, 200.0)
+    raster = rasterise([floor], CAMERA, width, height)
+    origin, directions = camera_rays(CAMERA, width, height)
+    down = directions[..., 1] < -1e-6
+    t = -origin[1] / directions[..., 1]
+    np.testing.assert_array_equal(raster.hit, down & (t < 400))
+    np.testing.assert_allclose(raster.depth[raster.hit], t[raster.hit], rtol=1e-10)
+    assert NEAR > 0
+
+
+def test_nearer_triangle_wins_the_depth_test_whatever_the_order():
+    near_box = transformed(cube(1.0), np.array([[1, 0, 0, 0], [0, 1, 0, 0.3], [0, 0, 1, 1.0],
+                                                [0, 0, 0, 1.0]]))
+    far_box = cube(2.0)
+    one = rasterise([far_box, near_box], CAMERA, 40, 30)
+    other = rasterise([near_box, far_box], CAMERA, 40, 30)
+    np.testing.assert_array_equal(one.depth, other.depth)
+    np.testing.assert_array_equal(one.object_id == 1, other.object_id == 0)    # the near box
+    np.testing.assert_array_equal(one.object_id == 0, other.object_id == 1)
+    assert (one.object_id == 1).sum() > 50 and (one.object_id == 0).sum() > 50
+
+
+def test_interpolated_normals_are_unit_and_face_the_eye():
+    raster = rasterise([uv_sphere(1.0, 24, 12)], CAMERA, 64, 48, cull_back_faces=True)
+    n = raster.normal[raster.hit]
+    np.testing.assert_allclose(np.linalg.norm(n, axis=1), 1.0, atol=1e-12)
+    _, directions = camera_rays(CAMERA, 64, 48)
+    assert np.all(dot(n, directions[raster.hit]) < 0.2)   # facing the eye, up to the facets
+
+
+@pytest.mark.parametrize("corners", [
+    [(1.0, 1.0), (1.0, 1.0), (5.0, 5.0)],           # two corners at one point
+    [(1.0, 1.0), (3.0, 3.0), (5.0, 5.0)],           # on one line
+])
+def test_triangle_without_area_draws_nothing(corners):
+    assert draw_triangle(np.array(corners), np.ones(3), size=(16, 12)) is None
