@@ -61,16 +61,17 @@ class Raster:
         Index of the mesh drawn; -1 where none.
     triangle : (H, W) int64 ndarray
         Index of the triangle drawn, within its mesh; -1 where none.
-    coverage : (H, W) int64 ndarray
+    coverage : (H, W) int64 ndarray or None
         How many triangles covered the pixel's centre (depth test or not): the fill rule's
-        check (a closed mesh's front faces cover each pixel of its image once).
+        check (a closed mesh's front faces cover each pixel of its image once). None from
+        the GPU pipeline (`gpu_shader.raster`), which does not count them.
     """
     depth: np.ndarray
     normal: np.ndarray
     uv: np.ndarray
     object_id: np.ndarray
     triangle: np.ndarray
-    coverage: np.ndarray
+    coverage: np.ndarray | None
 
     @property
     def hit(self) -> np.ndarray:

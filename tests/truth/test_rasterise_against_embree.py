@@ -16,32 +16,15 @@ import numpy as np
 import pytest
 
 from marchlab.compare import boundary, dilate
+from mesh_scenes import CAMERA, HEIGHT, SCENES, WIDTH
 from reference_cpu.rasterise import rasterise
 from reference_cpu.truth.embree import cast_triangles
-from scene_model.geometry import dot
 from reference_cpu.truth.mesh import Mesh
-from scene_model.camera import Camera, camera_rays
-from scene_model.meshes import cone, cube, merged, plane, torus, transformed, uv_sphere
+from scene_model.camera import camera_rays
+from scene_model.geometry import dot
+from scene_model.meshes import merged, plane
 
-CAMERA = Camera(position=(0.3, 1.6, 4.2), look_at=(0.0, 0.2, 0.0), fov=45.0)
-WIDTH, HEIGHT = 96, 72
 SILHOUETTE_SHARE = 0.02       # of the pixels next to a silhouette, at most 2% may disagree
-
-
-def turned(mesh, degrees, offset):
-    c, s = np.cos(np.radians(degrees)), np.sin(np.radians(degrees))
-    m = np.array([[c, 0, s, offset[0]], [0, 1, 0, offset[1]], [-s, 0, c, offset[2]],
-                  [0, 0, 0, 1.0]])
-    return transformed(mesh, m)
-
-
-SCENES = {
-    "sphere": [uv_sphere(1.0, 32, 16)],
-    "torus": [turned(torus(1.0, 0.35, 32, 16), 30, (0, 0.3, 0))],
-    "cube and cone on a floor": [turned(cube(1.0), 25, (-0.8, 0.5, 0.0)),
-                                 turned(cone(0.5, 1.2, 24), 0, (0.9, 0.0, 0.2)),
-                                 plane(6.0, 6.0, subdivisions=4)],
-}
 
 
 @pytest.mark.parametrize("name", SCENES)
