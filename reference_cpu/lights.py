@@ -87,6 +87,33 @@ def light_terms(light, p):
     return to_light, distance, factor[:, None] * np.ones(3, dtype), fade[:, None] * ambient
 
 
+def unshadowed(light, p):
+    """Everything of one light at points ``p`` (N, 3) that shading takes, before shadowing.
+
+    Returns
+    -------
+    to_light : (N, 3) ndarray
+    distance : (N,) ndarray
+        As `light_at`.
+    radiance : (N, 3) ndarray
+        What the diffuse term takes.
+    specular, ambient : (N, 3) ndarrays or None
+        For a light with its own colours (`scene_model.scene.Light.term_colors`), the
+        radiance its specular term takes and the ambient light it sends; None for a plain
+        light (its radiance does both, `reference_cpu.shading`).
+    reach : (N, 3) ndarray
+        Zero where the light sends nothing (outside a spot's cone): no shadow ray is needed.
+    """
+    if not light.separate_colors():
+        to_light, distance, radiance = light_at(light, p)
+        return to_light, distance, radiance, None, None, radiance
+    to_light, distance, falloff, ambient = light_terms(light, p)
+    _, diffuse_color, specular_color = (np.asarray(c, np.float64).astype(p.dtype)
+                                        for c in light.term_colors())
+    return (to_light, distance, falloff * diffuse_color, falloff * specular_color, ambient,
+            falloff)
+
+
 def attenuation(distance, constant, linear, quadratic):
     """1 / (K_c + K_l d + K_q d^2) for distances ``distance`` (N,)."""
     return 1 / (constant + distance * (linear + distance * quadratic))

@@ -28,7 +28,7 @@ from scene_model.textures import (MAPPING_CODES, surface_mapping, texture_atlas,
 from . import refraction, shading, texture
 from .cone_prepass import start_distances
 from .culling import BoundingSpheres
-from .lights import light_at, light_terms
+from .lights import unshadowed
 from .march import march
 from .normals import estimate_normal
 from .scene_sdf import build_scene_sdf
@@ -457,16 +457,8 @@ class Tracer:
         whatever the visibility, taken as 1.
         """
         s = self.settings
-        specular = ambient = None
-        if light.separate_colors():
-            to_light, distance, falloff, ambient = light_terms(light, surface.position)
-            _, diffuse_color, specular_color = (np.asarray(c, np.float64).astype(self.dtype)
-                                                for c in light.term_colors())
-            reach = falloff
-            radiance, specular = falloff * diffuse_color, falloff * specular_color
-        else:
-            to_light, distance, radiance = light_at(light, surface.position)
-            reach = radiance
+        to_light, distance, radiance, specular, ambient, reach = unshadowed(light,
+                                                                            surface.position)
         if s.shadows == "none":
             return to_light, radiance, specular, ambient, np.zeros(len(to_light), dtype=bool)
         # Only points facing the light can receive any; skip the others' shadow rays.
