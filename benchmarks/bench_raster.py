@@ -1,0 +1,122 @@
+"""The three rasterisers of triangle meshes side by side, and the sphere tracer against
+rasterisation at equal geometric error.
+
+    python benchmarks/bench_raster.py [--size 640x480] [--repeat 3]
+
+1. Time per frame of the mesh scene of the tests (a cube, a cone and a subdivided floor) and
+   of finer spheres, at ``--size``: the NumPy rasteriser (`reference_cpu.rasterise`), the
+   GPU raster pipeline (`gpu_shader.raster`, draw and read-back of its planes) and Embree's
+   ray casts through every pixel centre (`reference_cpu.truth.embree`).
+2. A sphere of radius 1 as a UV sphere of n segments (its largest distance from the true
+   sphere, where a triangle's centre lies, about r (1 - cos(pi / n))) against the SDF sphere
+   marched to the same epsilon: the gpu backend's sphere tracer and the raster pipeline,
+   each frame's surface error: how far from the exact sphere the point it shows lies,
+   | |o + t d| - 1 |, largest over the pixels it hits.
+
+Medians of ``--repeat`` frames after one warm-up; machines are shared and noisy, so compare
+the ratios of one run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import statistics
+import sys
+import time
+
+import numpy as np
+
+sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
+sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "tests"))
+
+from marchlab.cli import parse_size  # noqa: E402
+from mesh_scenes import CAMERA, SCENES  # noqa: E402
+from reference_cpu.rasterise import rasterise  # noqa: E402
+from scene_model.camera import camera_rays  # noqa: E402
+from scene_model.meshes import uv_sphere  # noqa: E402
+
+
+def median_seconds(run, repeat):
+    run()
+    times = []
+    for _ in range(repeat):
+        start = time.perf_counter()
+        run()
+        times.append(time.perf_counter() - start)
+    return statistics.median(times)
+
+
+def embree_cast(meshes, width, height):
+    from reference_cpu.truth.embree import cast
+    from reference_cpu.truth.mesh import Mesh
+    truth = [Mesh(m.positions, m.triangles.astype(np.int32), 0.0, None, "exact") for m in meshes]
+    origin, directions = camera_rays(CAMERA, width, height)
+    return cast(truth, origin, directions.reshape(-1, 3))
+
+
+def surface_error(depth, hit, width, height) -> float:
+    """Largest distance from the unit sphere of the points a frame shows: | |o + t d| - 1 |."""
+    origin, d = camera_rays(CAMERA, width, height)
+    points = origin + depth[hit][:, None] * d[hit]
+    return float(np.abs(np.linalg.norm(points, axis=1) - 1.0).max())
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--size", default="640x480", type=parse_size)
+    parser.add_argument("--repeat", type=int, default=3)
+    args = parser.parse_args()
+    width, height = args.size
+    from gpu_shader.raster import rasterise as gpu_rasterise
+    from gpu_shader.render import device_name
+
+    scenes = {"cube, cone and floor": SCENES["cube and cone on a floor"]}
+    for n in (32, 128):
+        scenes[f"UV sphere, {n} x {n // 2}"] = [uv_sphere(1.0, n, n // 2)]
+    print(f"Time per frame at {width}x{height}, ms (median of {args.repeat}):\n")
+    print("| scene | triangles | NumPy rasteriser | GPU raster pipeline | Embree ray casts |")
+    print("|---|---:|---:|---:|---:|")
+    for name, meshes in scenes.items():
+        cells = [median_seconds(lambda: rasterise(meshes, CAMERA, width, height), args.repeat),
+                 median_seconds(lambda: gpu_rasterise(meshes, CAMERA, width, height),
+                                args.repeat),
+                 median_seconds(lambda: embree_cast(meshes, width, height), args.repeat)]
+        triangles = sum(len(m.triangles) for m in meshes)
+        print(f"| {name} | {triangles:,} | " + " | ".join(f"{1000 * c:.1f}" for c in cells)
+              + " |", flush=True)
+
+    import dataclasses
+    import marchlab
+    from scene_model.builder import sphere
+    from scene_model.scene import RenderSettings, Scene
+    print("\nA unit sphere at equal geometric error: the raster pipeline's UV sphere of n "
+          "segments against the gpu backend's sphere tracer at epsilon = its error; each "
+          "frame's surface error (the farthest its points lie from the sphere), ms per "
+          "frame:\n")
+    print("| n | geometric error | raster: ms, surface error | sphere tracer: ms, surface "
+          "error |")
+    print("|---:|---:|---:|---:|")
+    base = Scene(camera=CAMERA, render=RenderSettings(shadows="none", reflection_depth=0),
+                 objects=(sphere(1.0),))
+    for n in (16, 64, 256, 1024):
+        error = 1 - math.cos(math.pi / n)
+        mesh = [uv_sphere(1.0, n, n // 2)]
+        raster_ms = median_seconds(lambda: gpu_rasterise(mesh, CAMERA, width, height),
+                                   args.repeat)
+        raster = gpu_rasterise(mesh, CAMERA, width, height)
+        scene = dataclasses.replace(base, render=dataclasses.replace(
+            base.render, epsilon=max(error, 1e-6)))
+        traced_ms = median_seconds(lambda: marchlab.render(scene, width, height, backend="gpu"),
+                                   args.repeat)
+        frame = marchlab.render(scene, width, height, backend="gpu")
+        raster_error = surface_error(raster.depth, raster.hit, width, height)
+        traced_error = surface_error(frame.depth, frame.hit, width, height)
+        print(f"| {n} | {error:.2e} | {1000 * raster_ms:.1f}, {raster_error:.2e} | "
+              f"{1000 * traced_ms:.1f}, {traced_error:.2e} |", flush=True)
+    print(f"\ngpu: {device_name()}")
+
+
+if __name__ == "__main__":
+    main()
