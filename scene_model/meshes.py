@@ -16,7 +16,9 @@ mesh, compared by position, then pair up exactly: each is used once in each dire
 
 Transforms follow the usual rule: positions by the matrix M, normals by the inverse
 transpose of its 3 x 3 part (then normalised), and a matrix with a negative determinant
-(a mirror) reverses the winding so that it stays outward.
+(a mirror) reverses the winding so that it stays outward. A `MeshNode` places a mesh (or a
+group) relative to its parent, so a hierarchy composes: a node's world matrix is its parent's
+times its own, M_world = M_parent T R S (a mobile's arm turns with the arm above it).
 """
 
 from __future__ import annotations
@@ -26,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .geometry import normalize
+from .geometry import normalize, rotation_matrix
 
 
 @dataclass(frozen=True)
@@ -288,3 +290,50 @@ def pyramid(base: float = 1.0, height: float = 1.0) -> TriangleMesh:
 PRIMITIVES = {"plane": plane, "cube": cube, "cube_sphere": cube_sphere, "uv_sphere": uv_sphere,
               "disk": disk, "cylinder": cylinder, "cone": cone, "pyramid": pyramid,
               "torus": torus}
+
+
+# --- the transform hierarchy -------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class MeshNode:
+    """A node of a transform hierarchy, placed relative to its parent.
+
+    Attributes
+    ----------
+    mesh : TriangleMesh or None
+        What the node draws; None for a group that only places its children.
+    translate : (3,) float
+        Where its origin is in its parent's frame (m).
+    rotate : (3,) float
+        Euler angles in degrees, turned about x, then y, then z (`geometry.rotation_matrix`,
+        as the SDF tree's Rotate node).
+    scale : float or (3,) float
+        Scale along its own axes, applied first.
+    children : tuple of MeshNode
+        Placed in this node's frame.
+    """
+    mesh: TriangleMesh | None = None
+    translate: tuple = (0.0, 0.0, 0.0)
+    rotate: tuple = (0.0, 0.0, 0.0)
+    scale: float | tuple = 1.0
+    children: tuple = ()
+
+
+def local_matrix(node: MeshNode) -> np.ndarray:
+    """The node's 4 x 4 matrix in its parent's frame: T R S (scale, then turn, then move)."""
+    m = np.eye(4)
+    m[:3, :3] = rotation_matrix(node.rotate) * np.broadcast_to(
+        np.asarray(node.scale, np.float64), (3,))
+    m[:3, 3] = node.translate
+    return m
+
+
+def world_meshes(node: MeshNode, parent=None) -> list[TriangleMesh]:
+    """Every mesh of the hierarchy under ``node``, in world coordinates, depth first (a
+    node's own mesh before its children's): mesh k of the list is object k of a picture.
+    ``parent`` is the 4 x 4 world matrix of the node's parent (the identity at the root)."""
+    world = (np.eye(4) if parent is None else np.asarray(parent, np.float64)) @ local_matrix(node)
+    meshes = [] if node.mesh is None else [transformed(node.mesh, world)]
+    for child in node.children:
+        meshes += world_meshes(child, world)
+    return meshes

@@ -12,8 +12,9 @@ import numpy as np
 import pytest
 
 from scene_model.geometry import dot
-from scene_model.meshes import (PRIMITIVES, TriangleMesh, cone, cube, cube_sphere, cylinder,
-                                flipped, merged, plane, pyramid, torus, transformed, uv_sphere)
+from scene_model.meshes import (PRIMITIVES, MeshNode, TriangleMesh, cone, cube, cube_sphere,
+                                cylinder, flipped, local_matrix, merged, plane, pyramid, torus,
+                                transformed, uv_sphere, world_meshes)
 
 CLOSED = ("cube", "cube_sphere", "uv_sphere", "cylinder", "cone", "pyramid", "torus")
 
@@ -123,3 +124,45 @@ def test_merged_and_flipped_meshes():
         [[1, 0, 0, 3.0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]])))
     assert volume(both) == pytest.approx(2.0, rel=1e-12)
     assert volume(flipped(cube(1.0))) == pytest.approx(-1.0, rel=1e-12)
+
+
+# --- the transform hierarchy ---------------------------------------------------------------
+
+def test_child_is_placed_in_its_parents_frame():
+    """An arm turned 90 degrees about y carries a child 1 m along its x axis to world -z
+    (Ry(90) (1, 0, 0) = (0, 0, -1)), scaled by the arm's scale."""
+    child = MeshNode(cube(0.2), translate=(1.0, 0.0, 0.0))
+    arm = MeshNode(None, translate=(0.0, 2.0, 0.0), rotate=(0.0, 90.0, 0.0), scale=0.5,
+                   children=(child,))
+    (mesh,) = world_meshes(arm)
+    centre = mesh.positions.mean(axis=0)
+    np.testing.assert_allclose(centre, (0.0, 2.0, -0.5), atol=1e-12)
+    assert volume(mesh) == pytest.approx((0.2 * 0.5) ** 3, rel=1e-12)
+
+
+def test_world_matrix_is_the_product_down_the_tree():
+    leaf = MeshNode(uv_sphere(0.3, 8, 4), translate=(0.4, 0.1, 0.0), rotate=(10, 20, 30),
+                    scale=(1.0, 2.0, 0.5))
+    middle = MeshNode(cube(0.5), translate=(1.0, 0.0, 0.0), rotate=(0, 45, 0),
+                      children=(leaf,))
+    root = MeshNode(None, translate=(0.0, 1.0, 0.0), rotate=(15, 0, 0), scale=2.0,
+                    children=(middle,))
+    own, nested = world_meshes(root)
+    expected = transformed(leaf.mesh, local_matrix(root) @ local_matrix(middle)
+                           @ local_matrix(leaf))
+    np.testing.assert_allclose(nested.positions, expected.positions, atol=1e-12)
+    np.testing.assert_allclose(nested.normals, expected.normals, atol=1e-12)
+    np.testing.assert_allclose(own.positions, transformed(
+        middle.mesh, local_matrix(root) @ local_matrix(middle)).positions, atol=1e-12)
+
+
+def test_turning_the_parent_turns_the_whole_mobile_rigidly():
+    """Distances between the parts of a mobile do not change as its top turns."""
+    def mobile(angle):
+        arm = MeshNode(cube(0.2), translate=(1.0, -0.5, 0.0), children=(
+            MeshNode(cube(0.1), translate=(0.5, -0.5, 0.0)),))
+        return MeshNode(None, rotate=(0.0, angle, 0.0), children=(arm,))
+    for angle in (0.0, 37.0, 180.0):
+        big, small = world_meshes(mobile(angle))
+        gap = small.positions.mean(axis=0) - big.positions.mean(axis=0)
+        assert np.linalg.norm(gap) == pytest.approx(np.hypot(0.5, 0.5), rel=1e-12)

@@ -20,8 +20,8 @@ from marchlab.compare import boundary, dilate
 from mesh_scenes import CAMERA, turned
 from reference_cpu.rasterise import rasterise
 from reference_cpu.raster_shading import shade_raster
-from scene_model.builder import box
-from scene_model.meshes import cube
+from scene_model.builder import box, union
+from scene_model.meshes import MeshNode, cube, world_meshes
 from scene_model.scene import (DirectionalLight, Material, PointLight, RenderSettings, Scene,
                                SolidBackground, SpotLight)
 
@@ -61,3 +61,30 @@ def test_unknown_model_is_refused():
     raster = rasterise([cube(1.0)], CAMERA, 16, 12)
     with pytest.raises(ValueError, match="unknown shading model 'depth'"):
         shade_raster(raster, CAMERA, [MATERIAL], LIGHTS, model="depth")
+
+
+def test_mesh_hierarchy_draws_the_sdf_tree_of_the_same_transforms():
+    """A group turned and moved, holding a scaled cube and a turned, moved one, against the
+    SDF union of the two boxes under the same Rotate and Translate nodes: the same objects
+    on the same pixels, and the same colours inside each face."""
+    group = MeshNode(None, translate=(0.3, 0.2, 0.0), rotate=(0.0, 30.0, 0.0), children=(
+        MeshNode(cube(1.0), scale=0.6),
+        MeshNode(cube(0.6), translate=(0.9, 0.6, 0.2), rotate=(20.0, 0.0, 10.0))))
+    tree = union(box(0.3, material="m"),
+                 box(0.3, material="m").rotate(20, 0, 10).at(0.9, 0.6, 0.2)
+                 ).rotate(0, 30, 0).at(0.3, 0.2, 0.0)
+    settings = RenderSettings(shadows="none", reflection_depth=0, epsilon=1e-6,
+                              background=SolidBackground(color=(0.0, 0.0, 0.0)))
+    scene = Scene(camera=CAMERA, render=settings, materials={"m": MATERIAL}, lights=LIGHTS,
+                  objects=(tree,))
+    frame = render(scene, WIDTH, HEIGHT, backend="numpy", precision="float64")
+    meshes = world_meshes(group)
+    raster = rasterise(meshes, CAMERA, WIDTH, HEIGHT)
+    color = np.clip(shade_raster(raster, CAMERA, [MATERIAL] * 2, LIGHTS, settings.ambient),
+                    0, 1)
+    np.testing.assert_array_equal(raster.object_id, frame.object_id)
+    faces = np.where(raster.hit, raster.object_id * 100 + raster.triangle // 2, -1)
+    inside = raster.hit & ~dilate(boundary(faces), 1)
+    assert (raster.object_id[inside] == 1).sum() > 20
+    assert (raster.object_id[inside] == 0).sum() > 20
+    assert np.abs(color - frame.color).max(axis=-1)[inside].max() <= 1e-6
