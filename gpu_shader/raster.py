@@ -40,12 +40,11 @@ def rasterise(meshes: list[TriangleMesh], camera: Camera, width: int, height: in
     """
     ctx = gl_context()
     with ctx:
-        program = ctx.program(vertex_shader=glsl_file("raster/mesh.vert"),
-                              fragment_shader=glsl_file("raster/mesh.frag"))
+        program = _program(ctx)
         planes = [ctx.texture((width, height), 4, dtype=dtype) for dtype in ("f4", "f4", "i4")]
         depth = ctx.depth_texture((width, height))
         fbo = ctx.framebuffer(color_attachments=planes, depth_attachment=depth)
-        made = [program, *planes, depth, fbo]
+        made = [*planes, depth, fbo]
         try:
             _set_camera(program, camera, width, height)
             fbo.use()
@@ -78,6 +77,17 @@ def rasterise(meshes: list[TriangleMesh], camera: Camera, width: int, height: in
                   object_id=ids[..., 0].astype(np.int64),
                   triangle=np.where(hit, ids[..., 1], -1).astype(np.int64),
                   coverage=None)
+
+
+_programs: dict[int, object] = {}
+
+
+def _program(ctx):
+    """The mesh program on ``ctx``, compiled on first use and kept (one per context)."""
+    if id(ctx) not in _programs:
+        _programs[id(ctx)] = ctx.program(vertex_shader=glsl_file("raster/mesh.vert"),
+                                         fragment_shader=glsl_file("raster/mesh.frag"))
+    return _programs[id(ctx)]
 
 
 def _set_camera(program, camera: Camera, width: int, height: int) -> None:

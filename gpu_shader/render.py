@@ -10,9 +10,9 @@ The same program runs in one of two shader stages (`STAGES`): as a fragment shad
 the frame (OpenGL 3.3), or as a compute shader dispatched one invocation per pixel that
 stores into the same textures (OpenGL 4.3; the "glsl-compute" dialect). They compute the same
 pixels with the same code (tests/gpu/test_compute_stage.py). Which is faster depends on the
-device: an NVIDIA H100 shades fragments on a few of its multiprocessors only, and llvmpipe
-(docs/performance.md, "Fragment or compute"). ``MARCHLAB_GPU_STAGE`` chooses; by default
-`default_stage`.
+device: an NVIDIA H100 shades fragments on a few of its multiprocessors only, so it computes
+far faster; llvmpipe runs its fragment stage faster (docs/performance.md, "Fragment or
+compute"). ``MARCHLAB_GPU_STAGE`` chooses; by default `default_stage`.
 Programs are cached by their text, which depends only on the scene's structure: a new
 camera or a moved object only rewrites the parameter buffer.
 """

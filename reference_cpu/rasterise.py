@@ -32,12 +32,11 @@ step, in the spirit of tinyrenderer (Sokolov, https://github.com/ssloy/tinyrende
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from scene_model.camera import Camera, camera_basis, camera_rays
+from scene_model.camera import Camera, camera_basis, camera_rays, to_camera, view_to_image
 from scene_model.geometry import normalize
 from scene_model.meshes import TriangleMesh
 
@@ -136,13 +135,6 @@ def ray_stretch(camera: Camera, width: int, height: int) -> np.ndarray:
     return 1.0 / (directions @ forward)
 
 
-def to_camera(points: np.ndarray, camera: Camera) -> np.ndarray:
-    """World points (N, 3) in the camera's frame: (right, up, forward) coordinates (N, 3)."""
-    forward, right, up = camera_basis(camera)
-    offset = points - np.asarray(camera.position, np.float64)
-    return np.stack([offset @ right, offset @ up, offset @ forward], axis=-1)
-
-
 def clipped_triangles(mesh: TriangleMesh, camera: Camera):
     """Yield (triangle index, corners) for every piece of ``mesh``'s triangles in front of
     the near plane; corners is a (3, 11) array of camera-frame position, normal, uv and the
@@ -181,11 +173,8 @@ def clip_near(corners: np.ndarray) -> list[np.ndarray]:
 def project_corners(corners: np.ndarray, camera: Camera, width: int, height: int):
     """The image position (3, 2) in pixels (x right, y down, from the top-left corner), view
     depth z (3,), normals (3, 3) and uvs (3, 2) of a triangle's corners (3, A)."""
-    half_height = math.tan(math.radians(camera.fov) / 2)
-    x_view, y_view, z = corners[:, 0], corners[:, 1], corners[:, 2]
-    x = (x_view / z / (half_height * width / height) + 1) * width / 2
-    y = (1 - y_view / z / half_height) * height / 2
-    return np.stack([x, y], axis=1), z, corners[:, 3:6], corners[:, 6:8]
+    return (view_to_image(corners[:, :3], camera, width, height), corners[:, 2],
+            corners[:, 3:6], corners[:, 6:8])
 
 
 def edge(ax, ay, bx, by, px, py):

@@ -151,16 +151,28 @@ def project(camera: Camera, points, width: int, height: int) -> np.ndarray:
         x, y in pixels from the image's top-left corner, and the depth along the view
         direction; x and y are nan for a point not in front of the camera (depth <= 0).
     """
+    view = to_camera(points, camera)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        image = view_to_image(view, camera, width, height)
+    behind = ~(view[:, 2] > 0)
+    image[behind] = np.nan
+    return np.concatenate([image, view[:, 2:]], axis=-1)
+
+
+def to_camera(points, camera: Camera) -> np.ndarray:
+    """World points (N, 3) in the camera's frame: their (right, up, forward) coordinates
+    (N, 3) float64, the last one the depth along the view direction."""
     forward, right, up = camera_basis(camera)
     offset = np.asarray(points, np.float64).reshape(-1, 3) - np.asarray(camera.position)
-    depth = offset @ forward
+    return np.stack([offset @ right, offset @ up, offset @ forward], axis=-1)
+
+
+def view_to_image(view: np.ndarray, camera: Camera, width: int, height: int) -> np.ndarray:
+    """Where points given in the camera's frame (N, 3) (`to_camera`, depth > 0) appear in the
+    image: (N, 2) x, y in pixels from its top-left corner, the inverse of `pixel_ray`."""
     half_height = math.tan(math.radians(camera.fov) / 2)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        sx = (offset @ right) / depth
-        sy = (offset @ up) / depth
+    sx = view[:, 0] / view[:, 2]
+    sy = view[:, 1] / view[:, 2]
     x = (sx / (half_height * width / height) + 1) * width / 2
     y = (1 - sy / half_height) * height / 2
-    behind = ~(depth > 0)
-    x[behind] = np.nan
-    y[behind] = np.nan
-    return np.stack([x, y, depth], axis=-1)
+    return np.stack([x, y], axis=-1)

@@ -209,9 +209,8 @@ def torus(major: float = 1.0, minor: float = 0.25, segments: int = 32,
         return centre + minor * n, n
 
     # Both angles wrap; v's seam is closed by computing it at v mod 1 as well.
-    mesh = parametric(lambda u, v: parts(u, v % 1.0)[0], lambda u, v: parts(u, v % 1.0)[1],
+    return parametric(lambda u, v: parts(u, v % 1.0)[0], lambda u, v: parts(u, v % 1.0)[1],
                       segments, sides, u_wraps=True)
-    return mesh
 
 
 def disk(radius: float = 1.0, segments: int = 32) -> TriangleMesh:

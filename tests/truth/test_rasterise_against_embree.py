@@ -22,7 +22,7 @@ from reference_cpu.truth.embree import cast_triangles
 from reference_cpu.truth.mesh import Mesh
 from scene_model.camera import camera_rays
 from scene_model.geometry import dot
-from scene_model.meshes import merged, plane
+from scene_model.meshes import plane
 
 SILHOUETTE_SHARE = 0.02       # of the pixels next to a silhouette, at most 2% may disagree
 
@@ -59,7 +59,7 @@ def test_rasterised_picture_is_the_ray_cast_picture(embree, name):
 def test_watertight_mesh_shows_no_background_through_its_seams(embree):
     """Where Embree sees the floor's 32 triangles with no gap, so does the rasteriser: every
     pixel of the floor's interior is drawn, exactly once."""
-    floor = merged(plane(6.0, 6.0, subdivisions=4))
+    floor = plane(6.0, 6.0, subdivisions=4)
     raster = rasterise([floor], CAMERA, WIDTH, HEIGHT)
     inside = ~dilate(boundary(raster.hit), 1) & raster.hit
     assert inside.sum() > 1000
