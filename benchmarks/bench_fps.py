@@ -88,7 +88,7 @@ class Drawer:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--scenes", default=",".join(bundled_scene_names()))
+    parser.add_argument("--scenes", default=",".join(bundled_scene_names(meshes=False)))
     parser.add_argument("--size", default="1920x1080", type=parse_size)
     parser.add_argument("--frames", type=int, default=200)
     parser.add_argument("--prepass", default="none,cone")

@@ -96,7 +96,7 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--backends", default=",".join(TIMED))
     args = parser.parse_args()
-    names = bundled_scene_names()
+    names = bundled_scene_names(meshes=False)
     width, height = args.steps_size
     print(f"Steps per pixel at {width}x{height} (NumPy float32; primary + pre-pass = "
           "fraction of plain; pixels whose hit or object differs):\n")

@@ -26,7 +26,7 @@ REPEAT = 7
 def main() -> None:
     print("| scene | " + " | ".join(VARIANTS) + " |")
     print("|---|" + "---|" * len(VARIANTS))
-    for name in bundled_scene_names():
+    for name in bundled_scene_names(meshes=False):
         scene = rendered_scene(load_scene(name))
         variants = [dataclasses.replace(scene, render=dataclasses.replace(scene.render, **c))
                     for c in VARIANTS.values()]

@@ -46,7 +46,7 @@ for place in ("marchlab.bodies", "scene_model.scene"):   # an earlier layout fir
 labels = "path_labels" in inspect.signature(marchlab.render).parameters
 extra = {"path_labels": True} if labels else {}
 opencl = importlib.import_module(BACKENDS["opencl"].module)
-scenes = {"scene-" + n: (marchlab.load_scene(n), 96, 72) for n in marchlab.bundled_scene_names()}
+scenes = {"scene-" + n: (marchlab.load_scene(n), 96, 72) for n in marchlab.bundled_scene_names(meshes=False)}
 scenes.update({"case-" + n: (s, 64, 48) for n, s in cases.feature_cases().items()})
 for key, (scene, w, h) in scenes.items():
     for backend in wanted:

@@ -90,7 +90,7 @@ def sweep_scenes() -> dict[str, Scene]:
     are measured against the Embree truth, `truth_method`)."""
     from scene_model.scenefile import bundled_scene_names, load_scene
     scenes = analytic_scenes()
-    for name in bundled_scene_names():
+    for name in bundled_scene_names(meshes=False):
         scene = load_scene(name)
         if truth_method(scene) == "embree":
             scenes[name] = scene

@@ -161,8 +161,9 @@ def build_parser() -> Parser:
     p.add_argument("-o", "--output", help="output file, .png or .npz (default: SCENE.png)")
     p.add_argument("--size", type=parse_size, default=(640, 480), metavar="WxH",
                    help="image size in pixels (default: 640x480)")
-    p.add_argument("--backend", choices=list(BACKENDS), default="numpy",
-                   help="renderer (default: numpy, the reference)")
+    p.add_argument("--backend", choices=list(BACKENDS), default=None,
+                   help="renderer (default: numpy, the reference; numpy-raster for a scene of "
+                        "triangle meshes)")
     p.add_argument("--precision", choices=PRECISIONS, default=None,
                    help="floating-point precision of the arithmetic (default: the backend's: "
                         "float64 for numpy, float32 for gpu)")
@@ -208,10 +209,12 @@ def build_parser() -> Parser:
     p = sub.add_parser("compare", help="render a scene with two backends and compare them "
                                        "pixel by pixel (exit 1 if a gate fails)")
     p.add_argument("scene", help="bundled scene name or a .toml path")
-    p.add_argument("--a", default="numpy", choices=list(BACKENDS),
-                   help="the reference backend (default: numpy)")
-    p.add_argument("--b", default="gpu", choices=list(BACKENDS),
-                   help="the backend checked against it (default: gpu)")
+    p.add_argument("--a", default=None, choices=list(BACKENDS),
+                   help="the reference backend (default: numpy, or numpy-raster for a scene "
+                        "of triangle meshes)")
+    p.add_argument("--b", default=None, choices=list(BACKENDS),
+                   help="the backend checked against it (default: gpu, or raster for a scene "
+                        "of triangle meshes)")
     p.add_argument("--a-precision", choices=PRECISIONS, default=None,
                    help="precision of a (default: float32 when b is float32, else a's own)")
     p.add_argument("--b-precision", choices=PRECISIONS, default=None)

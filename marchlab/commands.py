@@ -32,7 +32,7 @@ from scene_model.timeline import check_keyframes
 from .budget import (COMMAND_LINE, MAX_BENCH_RAY_STEPS, check, check_animation, check_image,
                      check_render, check_truth)
 from .outputs import check_outputs, make_folders
-from .render import BACKENDS, backend_problem, render
+from .render import BACKENDS, backend_problem, reference_backend, render
 
 OUTPUT_SUFFIXES = (".png", ".npz")
 
@@ -69,6 +69,7 @@ def cmd_render(args) -> int:
         raise MarchlabError(f"{output}: {drawn[0]} draws on a picture: write a .png")
     check_outputs(files=[output])
     scene = load_scene(args.scene, args.set)
+    args.backend = args.backend or reference_backend(scene)
     selected = outlined_ids(scene, args.outline)
     width, height = args.size
     with about_options(f"--size {width}x{height}"):
@@ -173,6 +174,8 @@ def cmd_compare(args) -> int:
     refuse_empty_paths(args, "--save")
     check_outputs(folders=[args.save])
     scene = load_scene(args.scene, args.set)
+    args.a = args.a or reference_backend(scene)
+    args.b = args.b or ("raster" if scene.meshes else "gpu")
     width, height = args.size
     with about_options(f"--size {width}x{height}"):
         check_render(scene, width, height, frames=2, allow_large=args.allow_large,
@@ -192,7 +195,7 @@ def cmd_compare(args) -> int:
                 allow_large=args.allow_large))
     a, b = frames
     c = compare_frames(a, b, epsilon=scene.render.epsilon)
-    gates = gates_against(a.precision)
+    gates = gates_against(a.precision, meshes=bool(scene.meshes))
     failed = failures(c, gates)
     print(f"{args.scene}: {args.b} {b.precision} against {args.a} {a.precision}, "
           f"{width}x{height}")

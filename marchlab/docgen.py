@@ -20,6 +20,7 @@ from scene_model.fields import field_types, show
 from scene_model.scene import (Background, Camera, Checker, Fog, Light, Material, RenderSettings,
                                Scene, Texture)
 from scene_model.shapes import node_kinds
+from scene_model.mesh_objects import mesh_kinds
 
 BEGIN = "<!-- BEGIN GENERATED FIELD REFERENCE (python -m marchlab.docgen) -->"
 END = "<!-- END GENERATED FIELD REFERENCE -->"
@@ -107,6 +108,13 @@ def reference() -> str:
             "`position` (array of 3 numbers), `rotation` (Euler angles in degrees) and `scale` "
             "(a positive number); see *The SDF tree* above.", ""]
     for kind, cls in node_kinds().items():
+        out += section(f'`type = "{kind}"`', cls)
+    out += ["### `[[meshes]]`", "",
+            "Triangle meshes, drawn by the raster backends (numpy-raster, raster, embree). "
+            "Every mesh table has a `type`; each places itself in its parent's frame by "
+            "`position`, `rotation` and `scale` and holds its own `children` "
+            "(docs/rasterisation.md, *The transform hierarchy*).", ""]
+    for kind, cls in mesh_kinds().items():
         out += section(f'`type = "{kind}"`', cls)
     out += section("`[physics]`", PhysicsSettings)
     out += section("`[[bodies]]`", Body)

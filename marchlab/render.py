@@ -39,7 +39,16 @@ BACKENDS = {
                    "the generated fragment shader, through moderngl and EGL"),
     "opencl": Backend("gpu_shader.opencl", ("float32", "float64"),
                       "the same generated code as an OpenCL kernel, on a CPU device (PoCL)"),
+    "numpy-raster": Backend("reference_cpu.raster_render", ("float64",),
+                            "the readable NumPy rasteriser, for triangle meshes (CPU)"),
+    "raster": Backend("gpu_shader.raster_render", ("float32",),
+                      "OpenGL's raster pipeline, for triangle meshes, through moderngl"),
+    "embree": Backend("reference_cpu.truth.embree_render", ("float32",),
+                      "Embree's ray casts of triangle meshes: the raster backends' truth"),
 }
+
+# The backends that draw a scene's triangle meshes; the others sphere-trace its SDF objects.
+MESH_BACKENDS = ("numpy-raster", "raster", "embree")
 
 PRECISIONS = ("float32", "float64")
 
@@ -90,6 +99,9 @@ def render(scene: Scene, width: int, height: int, backend: str = "numpy",
     if not isinstance(scene, Scene):
         raise MarchlabError(f"scene must be a marchlab.Scene (got {type(scene).__name__}); "
                             "use marchlab.load_scene(name_or_path)")
+    if scene.meshes and backend not in MESH_BACKENDS:
+        raise MarchlabError(f"this scene is made of triangle meshes, which the {backend} "
+                            f"backend does not draw: use --backend {', '.join(MESH_BACKENDS)}")
     check_render(scene, width, height, allow_large=allow_large)
     from .light_check import lights_inside
     for line in lights_inside(scene):               # the image would hide it: say so
@@ -98,6 +110,12 @@ def render(scene: Scene, width: int, height: int, backend: str = "numpy",
     # Backends draw objects only: the bodies become spheres after the scene's objects.
     return module.render(rendered_scene(scene), width, height, precision=precision,
                          progress=progress, path_labels=path_labels)
+
+
+def reference_backend(scene: Scene) -> str:
+    """The reference renderer of ``scene``: the NumPy sphere tracer, or for a scene of
+    triangle meshes the NumPy rasteriser."""
+    return "numpy-raster" if scene.meshes else "numpy"
 
 
 def backend_problem(backend: str) -> str | None:

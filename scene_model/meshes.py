@@ -57,6 +57,29 @@ class TriangleMesh:
         return normalize(np.cross(v1 - v0, v2 - v0))
 
 
+def smooth_groups(mesh: TriangleMesh) -> np.ndarray:
+    """(T,) int64: which smooth patch each triangle belongs to: two triangles are joined
+    where they share an edge, both its vertices (not merely a vertex position). Across a
+    patch the interpolated normal is continuous; between two it may jump: at a cube's edges
+    (each face keeps vertices of its own) or between a cone's side triangles at its apex
+    (each has an apex vertex with its own normal)."""
+    triangles = mesh.triangles
+    count = len(triangles)
+    edges = np.sort(triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    edge = np.unique(edges[:, 0] * len(mesh.positions) + edges[:, 1], return_inverse=True)[1]
+    owner = np.repeat(np.arange(count), 3)                        # the triangle of each edge
+    label = np.arange(count)
+    while True:                          # each triangle takes its lowest neighbour's label
+        lowest = np.full(edge.max(initial=0) + 1, count)
+        np.minimum.at(lowest, edge, label[owner])
+        joined = label.copy()
+        np.minimum.at(joined, owner, lowest[edge])
+        joined = joined[joined]                                   # follow chains at once
+        if np.array_equal(joined, label):
+            return label
+        label = joined
+
+
 def parametric(point, normal, u_segments: int, v_segments: int,
                u_wraps: bool = False) -> TriangleMesh:
     """The grid mesh of a parametric surface.

@@ -21,6 +21,7 @@ from .sampling import MAX_SAMPLES, SamplePattern
 from .fields import (DIRECTION, POINT, SIZE, Color, Each, Range, Record, Rule, Vec3,
                      color_range, number_text, param, unit_interval)
 from .shapes import Node, children, primitives
+from .mesh_objects import MeshObject, mesh_material_names
 
 
 @dataclass(frozen=True)
@@ -424,6 +425,9 @@ class Scene(Record):
                                            doc="Materials by name.")
     lights: tuple[Light, ...] = param(factory=_default_lights, doc="Light sources.")
     objects: tuple[Node, ...] = param((), "The shapes; their union is the scene.")
+    meshes: tuple[MeshObject, ...] = param((), "Triangle meshes, drawn by the raster backends "
+                                               "(numpy-raster, raster, embree) instead of "
+                                               "objects (docs/rasterisation.md).")
     physics: PhysicsSettings | None = param(None, "How bodies are simulated; absent: the "
                                                   "defaults of [physics].")
     bodies: tuple[Body, ...] = param((), "Dynamic spheres, simulated and drawn.")
@@ -472,6 +476,9 @@ class Scene(Record):
             if prim.material not in self.materials:
                 raise SceneError(f"primitive {index} ({prim.kind}) uses unknown material "
                                  f"{prim.material!r} (defined: {known})", ("materials",))
+        for path, name in mesh_material_names(self.meshes):
+            if name not in self.materials:
+                raise SceneError(f"unknown material {name!r} (defined: {known})", path)
         for index, body in enumerate(self.bodies):
             if body.material not in self.materials:
                 raise SceneError(f"unknown material {body.material!r} (defined: {known})",

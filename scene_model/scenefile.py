@@ -30,13 +30,14 @@ from .fields import field_types
 from .files import write_atomically
 from .nesting import deep_path, parse_toml
 from .scene import Background, Light, Scene
+from .mesh_objects import MeshObject, mesh_kinds, relative_to
 from .shapes import TOO_DEEP, Node, Rotate, Scale, Translate, node_kinds
 
 # Shorthand keys on an object table, outermost first, and the transform each one stands for.
 SHORTHAND = {"position": (Translate, "offset"), "rotation": (Rotate, "degrees"),
              "scale": (Scale, "factor")}
 
-POLYMORPHIC = {Node: node_kinds, Light: lambda: _kinds(Light),
+POLYMORPHIC = {Node: node_kinds, MeshObject: mesh_kinds, Light: lambda: _kinds(Light),
                Background: lambda: _kinds(Background)}
 
 
@@ -46,10 +47,14 @@ def _kinds(base) -> dict[str, type]:
 
 # --- Reading ---------------------------------------------------------------------------------
 
-def bundled_scene_names() -> list[str]:
-    """Names of the scenes shipped in scene_model/scenes/."""
+def bundled_scene_names(meshes: bool | None = None) -> list[str]:
+    """Names of the scenes shipped in scene_model/scenes/: all of them, or with ``meshes``
+    True only the scenes of triangle meshes, with False only the others (the SDF scenes)."""
     folder = resources.files("scene_model") / "scenes"
-    return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml"))
+    names = sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml"))
+    if meshes is None:
+        return names
+    return [name for name in names if bool(load_scene(name).meshes) == meshes]
 
 
 def scene_path(name_or_path: str | os.PathLike) -> Path:
@@ -98,16 +103,19 @@ def load_scene(name_or_path: str | os.PathLike, overrides: list[str] = ()) -> Sc
 
 
 def with_files_from(scene: Scene, folder) -> Scene:
-    """``scene`` with the image files it names (an environment's, the materials' textures)
-    read relative to ``folder``, the folder of the scene file, as a scene file means them."""
+    """``scene`` with the files it names (an environment's images, the materials' textures,
+    the meshes' OBJ files) read relative to ``folder``, the folder of the scene file, as a
+    scene file means them."""
     background = scene.render.background.relative_to(folder)
     materials = {name: m if m.texture is None else dataclasses.replace(
                      m, texture=m.texture.relative_to(folder))
                  for name, m in scene.materials.items()}
-    if background == scene.render.background and materials == scene.materials:
+    meshes = tuple(relative_to(node, folder) for node in scene.meshes)
+    if (background == scene.render.background and materials == scene.materials
+            and meshes == scene.meshes):
         return scene
-    return dataclasses.replace(scene, materials=materials, render=dataclasses.replace(
-        scene.render, background=background))
+    return dataclasses.replace(scene, materials=materials, meshes=meshes,
+                               render=dataclasses.replace(scene.render, background=background))
 
 
 def scene_from_dict(data: dict) -> Scene:
@@ -139,8 +147,10 @@ def _record(cls, table: Any, path: tuple, materials) -> Any:
             kwargs[f.name] = _value(hints[f.name], table[f.name], path + (f.name,), materials)
         elif f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:
             raise SceneError(f"missing key {f.name!r}", path)
-    if "material" in names and materials is not None:          # a primitive or a body
-        name = kwargs.get("material", "default")
+    if "material" in names and materials is not None:          # a primitive, body or mesh
+        # An OBJ model's material may be absent (its own MTL colours it).
+        name = kwargs.get("material", next(f.default for f in dataclasses.fields(cls)
+                                           if f.name == "material"))
         if isinstance(name, str) and name not in materials:
             known = ", ".join(sorted(materials)) or "none"
             problem = (f"unknown material {name!r}" if "material" in table else
@@ -158,10 +168,10 @@ def _record(cls, table: Any, path: tuple, materials) -> Any:
 def _value(hint, value, path: tuple, materials):
     """Convert nested tables and arrays of tables; leave scalars to the record's own checks."""
     origin, args = typing.get_origin(hint), typing.get_args(hint)
-    if _is_record(hint):
-        return _record(hint, value, path, materials)
     if hint in POLYMORPHIC:
         return _record(_pick(hint, value, path), value, path, materials)
+    if _is_record(hint):
+        return _record(hint, value, path, materials)
     if origin is tuple and args[-1] is Ellipsis and isinstance(value, list):
         return tuple(_value(args[0], v, path + (i,), materials) for i, v in enumerate(value))
     if origin is dict and isinstance(value, dict):
@@ -266,6 +276,8 @@ def scene_to_dict(scene: Scene) -> dict:
 def _table(record) -> dict:
     if isinstance(record, Node):
         return _node_table(record)
+    if isinstance(record, MeshObject):
+        return _mesh_table(record)
     out = {"type": record.kind} if _base(type(record)) else {}
     for f in dataclasses.fields(record):
         value = _plain(getattr(record, f.name))
@@ -300,6 +312,23 @@ def _node_table(node: Node) -> dict:
     return out
 
 
+def _mesh_table(node: MeshObject) -> dict:
+    """A mesh node's table as a person writes it: its type and parameters, then where it is
+    (only what differs from no move, no turn, scale 1), then its children."""
+    out = {"type": node.kind}
+    placement = {"position": (0.0,) * 3, "rotation": (0.0,) * 3, "scale": (1.0,) * 3}
+    for f in dataclasses.fields(node):
+        value = getattr(node, f.name)
+        if f.name not in placement and f.name != "children" and value is not None:
+            out[f.name] = _plain(value)
+    for name, still in placement.items():
+        if getattr(node, name) != still:
+            out[name] = _plain(getattr(node, name))
+    if node.children:
+        out["children"] = _plain(node.children)
+    return out
+
+
 def save_scene(scene: Scene, path: str | os.PathLike) -> None:
     """Write ``scene`` as TOML; the file appears whole or not at all."""
     write_atomically(path, scene_to_toml(scene).encode())
@@ -310,9 +339,10 @@ def scene_to_toml(scene: Scene) -> str:
     data = scene_to_dict(scene)
     doc = tomlkit.document()
     doc.add(tomlkit.comment("marchlab scene (docs/scene-format.md describes every field)"))
-    lists = ("bodies", "motions", "keyframes")
+    lists = ("bodies", "motions", "keyframes", "meshes") + (("objects",) if data.get("meshes")
+                                                           else ())
     for key in ("description", "camera", "render", "physics", "materials", "lights", "objects",
-                "motions", "bodies", "orbit", "keyframes"):
+                "meshes", "motions", "bodies", "orbit", "keyframes"):
         # A scene without bodies, motions or keyframes is saved without ``bodies = []``, as it
         # was before they existed.
         if key in data and data[key] is not None and not (key in lists and not data[key]):

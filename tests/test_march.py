@@ -281,7 +281,7 @@ def scene_rays(name, dtype, width=40, height=30):
 
 
 @pytest.mark.parametrize("precision", ["float64", "float32"])
-@pytest.mark.parametrize("name", marchlab.bundled_scene_names())
+@pytest.mark.parametrize("name", marchlab.bundled_scene_names(meshes=False))
 def test_fast_march_is_bit_identical_to_the_textbook_march_on_every_bundled_scene(name,
                                                                                  precision):
     ended = []

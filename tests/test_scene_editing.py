@@ -570,7 +570,7 @@ def test_history_keeps_the_last_limit_steps():
 
 # --- Round trip through the file ---------------------------------------------------------------
 
-@pytest.mark.parametrize("name", bundled_scene_names())
+@pytest.mark.parametrize("name", bundled_scene_names(meshes=False))
 def test_scene_edited_by_every_operation_comes_back_from_its_file(name, tmp_path):
     scene = load_scene(name)
     scene, group = add_object(scene, default_node("smooth_union"))

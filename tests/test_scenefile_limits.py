@@ -21,6 +21,7 @@ from marchlab import SceneError, docgen, load_scene
 from scene_model.fields import (COORDINATE, MAX_COORDINATE, MAX_SIZE, MIN_SIZE, POINT, SIZE,
                                 SIZES, Each, Range, Record, number_text)
 from scene_model.scene import Camera, PointLight, RenderSettings, SpotLight
+from scene_model.mesh_objects import MeshObject, mesh_kinds
 from scene_model.scenefile import scene_path
 from scene_model.shapes import Capsule, Sphere
 
@@ -31,7 +32,8 @@ def record_classes() -> list[type]:
     while stack:
         cls = stack.pop()
         stack.extend(cls.__subclasses__())
-        if dataclasses.is_dataclass(cls) and cls.__module__.startswith("scene_model."):
+        # Only classes declared as dataclasses: a base such as ProceduralMesh adds no field.
+        if "__dataclass_fields__" in cls.__dict__ and cls.__module__.startswith("scene_model."):
             found.append(cls)
     return sorted(found, key=lambda c: c.__name__)
 
@@ -116,7 +118,8 @@ def _is_vector(hint) -> bool:
 
 COORDINATE_FIELDS = {"Camera.position", "Camera.look_at", "PointLight.position",
                      "SpotLight.position", "Translate.offset", "Capsule.a", "Capsule.b",
-                     "Body.position", "Motion.pivot"}
+                     "Body.position", "Motion.pivot"} | {
+                     f"{cls.__name__}.position" for cls in (MeshObject, *mesh_kinds().values())}
 SIZE_FIELDS = {"Sphere.radius", "Box.half_size", "RoundBox.half_size", "RoundBox.radius",
                "Torus.major_radius", "Torus.minor_radius", "CappedCylinder.radius",
                "CappedCylinder.half_height", "Capsule.radius", "Cone.radius", "Cone.height",
@@ -124,7 +127,11 @@ SIZE_FIELDS = {"Sphere.radius", "Box.half_size", "RoundBox.half_size", "RoundBox
                "HexPrism.apothem", "HexPrism.half_length",
                "SmoothUnion.k", "SmoothIntersection.k", "SmoothSubtraction.k", "Scale.factor",
                "Checker.scale", "Texture.scale", "Body.radius", "Body.half_size",
-               "Body.half_length"}
+               "Body.half_length"} | {
+               f"{cls.__name__}.{f.name}" for cls in (MeshObject, *mesh_kinds().values())
+               for f in dataclasses.fields(cls)
+               if f.name in ("scale", "radius", "width", "depth", "size", "height", "base",
+                             "major", "minor")}
 
 
 def fields_checked_by(*checks) -> dict[str, tuple]:

@@ -30,8 +30,8 @@ from scene_model.shapes import (Box, CappedCylinder, Capsule, Cone, Disk, HexPri
 
 
 BUNDLED = marchlab.bundled_scene_names()
-TOP_LEVEL_KEYS = {"description", "camera", "render", "materials", "lights", "objects", "physics",
-                  "bodies", "keyframes"}
+TOP_LEVEL_KEYS = {"description", "camera", "render", "materials", "lights", "objects", "meshes",
+                  "physics", "bodies", "keyframes"}
 
 
 def round_trip(scene: Scene, tmp_path, name: str = "scene.toml") -> Scene:

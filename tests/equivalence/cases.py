@@ -270,10 +270,11 @@ PATH_FRACTION = {"scene:glass": 0.001, "scene:glass+prepass": 0.001}
 
 def all_cases() -> list[tuple[str, Scene, tuple[int, int]]]:
     """(name, scene, size) for every bundled scene and every feature case."""
-    out = [(f"scene:{name}", load_scene(name), BUNDLED_SIZE) for name in bundled_scene_names()]
+    out = [(f"scene:{name}", load_scene(name), BUNDLED_SIZE)
+           for name in bundled_scene_names(meshes=False)]
     # ... and each again with the cone pre-pass
     out += [(f"scene:{name}+prepass", load_scene(name, ["render.prepass=cone"]), BUNDLED_SIZE)
-            for name in bundled_scene_names()]
+            for name in bundled_scene_names(meshes=False)]
     out += [(f"feature:{name}", scene, SIZES.get(name, SIZE))
             for name, scene in feature_cases().items()]
     return out
