@@ -29,6 +29,10 @@ APT_PACKAGES = {"gpu": ("libegl1", "libegl-mesa0", "libgl1-mesa-dri"),
                 "view": ("xvfb",),    # a display in memory: headless `marchlab view`, its tests
                 "lessons": ("chromium",)}   # the notebook view's browser test (Playwright)
 PYTHON_MODULES = {"gpu": ("moderngl",), "opencl": ("pyopencl",)}
+# Backends that need what another backend or an extra brings: the raster pipeline draws with
+# the gpu backend's OpenGL, the embree backend casts with the embree extra's embreex.
+SAME_NEEDS = {"raster": "gpu", "embree": "embree"}
+PYTHON_MODULES["embree"] = ("embreex",)
 
 
 @dataclass(frozen=True)
@@ -84,11 +88,12 @@ def backend_finding(name: str) -> Finding:
         problem = f"{type(err).__name__}: {err}"     # saying so is the doctor's whole job
     if problem is None:
         return Finding("backend", name, True, device_of(name))
-    missing = [m for m in PYTHON_MODULES.get(name, ()) if importlib.util.find_spec(m) is None]
+    needs = SAME_NEEDS.get(name, name)
+    missing = [m for m in PYTHON_MODULES.get(needs, ()) if importlib.util.find_spec(m) is None]
     if missing:
-        fix = f"pip install 'marchlab[{name}]' (or make demo)"
-    elif name in APT_PACKAGES:
-        fix = (f"sudo apt-get install {' '.join(APT_PACKAGES[name])} "
+        fix = f"pip install 'marchlab[{needs}]' (or make demo)"
+    elif needs in APT_PACKAGES:
+        fix = (f"sudo apt-get install {' '.join(APT_PACKAGES[needs])} "
                "(or make system-packages as root)")
     else:
         fix = ""

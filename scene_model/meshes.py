@@ -58,17 +58,30 @@ class TriangleMesh:
 
 
 def smooth_groups(mesh: TriangleMesh) -> np.ndarray:
-    """(T,) int64: which smooth patch each triangle belongs to: two triangles are joined
-    where they share an edge, both its vertices (not merely a vertex position). Across a
-    patch the interpolated normal is continuous; between two it may jump: at a cube's edges
-    (each face keeps vertices of its own) or between a cone's side triangles at its apex
-    (each has an apex vertex with its own normal)."""
+    """(T,) int64: labels of the pieces across which a picture of the mesh is smooth.
+
+    Two triangles are joined where they share an edge, both its vertices: their normals
+    and texture coordinates agree along it. An edge whose two corners appear in another
+    triangle as *other* vertices at the same positions is a crease: the attributes may jump
+    there (a cube's edges, where each face keeps vertices of its own; a cone's side at its
+    apex, where each triangle has an apex vertex with its own normal; a sphere's uv seam).
+    A triangle on a crease keeps a label of its own; the others take their joined patch's.
+    """
     triangles = mesh.triangles
     count = len(triangles)
-    edges = np.sort(triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
-    edge = np.unique(edges[:, 0] * len(mesh.positions) + edges[:, 1], return_inverse=True)[1]
+    at = np.unique(mesh.positions, axis=0, return_inverse=True)[1].reshape(-1)
+    corners = triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+    by_index = _edge_keys(np.sort(corners, axis=1), len(mesh.positions))
+    by_place = _edge_keys(np.sort(at[corners], axis=1), len(mesh.positions))
     owner = np.repeat(np.arange(count), 3)                        # the triangle of each edge
+    # A crease: one edge in space made of two different pairs of vertices.
+    places, first = np.unique(by_place, return_inverse=True)
+    pairs = np.unique(np.stack([first, by_index], axis=1), axis=0)[:, 0]
+    crease = np.bincount(pairs, minlength=len(places))[first] > 1
+    on_crease = np.zeros(count, bool)
+    on_crease[owner[crease]] = True
     label = np.arange(count)
+    edge = np.unique(by_index, return_inverse=True)[1]
     while True:                          # each triangle takes its lowest neighbour's label
         lowest = np.full(edge.max(initial=0) + 1, count)
         np.minimum.at(lowest, edge, label[owner])
@@ -76,8 +89,14 @@ def smooth_groups(mesh: TriangleMesh) -> np.ndarray:
         np.minimum.at(joined, owner, lowest[edge])
         joined = joined[joined]                                   # follow chains at once
         if np.array_equal(joined, label):
-            return label
+            break
         label = joined
+    return np.where(on_crease, count + np.arange(count), label)
+
+
+def _edge_keys(pairs: np.ndarray, base: int) -> np.ndarray:
+    """One int64 per sorted vertex pair (E, 2)."""
+    return pairs[:, 0].astype(np.int64) * base + pairs[:, 1]
 
 
 def parametric(point, normal, u_segments: int, v_segments: int,
