@@ -389,6 +389,12 @@ class RenderSettings(Record):
                                      "after the first hit.", Range(0, MAX_REFLECTION_DEPTH))
     fresnel: Literal["exact", "schlick"] = param(
         "exact", "Glass: Fresnel's equations, or Schlick's approximation of them.")
+    blending: Literal["depth_peeling", "sorted"] = param(
+        "depth_peeling", "Meshes: how transparent surfaces are blended over what is behind "
+                         "them, peeled nearest first (order-independent, Everitt 2001) or "
+                         "sorted back to front by triangle (the painter's algorithm).")
+    peel_layers: int = param(4, "Meshes, depth peeling: the most transparent surfaces "
+                                "composited on one pixel.", Range(1, 64))
     shading: Shading = param("phong", "Shading mode.")
     toon_bands: int = param(4, "Toon and stripes shading: number of brightness bands, or of "
                                "stripes (an 8-bit image shows at most 256).", Range(2, 256))
