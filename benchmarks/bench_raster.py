@@ -13,6 +13,14 @@ rasterisation at equal geometric error.
    each frame's surface error: how far from the exact sphere the point it shows lies,
    | |o + t d| - 1 |, largest over the pixels it hits.
 
+3. The lit raster pipeline (`gpu_shader.raster.RasterRenderer`: meshes uploaded once, a
+   shader generated for the scene, the skybox drawn last): ms per frame of the cube, cone
+   and floor with a uv texture, a triplanar one and a checkerboard under a point, a
+   directional and a coloured spot light, against each background kind; the draw alone
+   (until glFinish returns), with the colour read back (what a viewer shows), and with
+   every plane read back into a colour and a `Raster`; and NumPy's rasteriser and
+   `shade_raster` for the same frame. ``--lit-only`` runs this part alone.
+
 Medians of ``--repeat`` frames after one warm-up; machines are shared and noisy, so compare
 the ratios of one run.
 """
@@ -67,10 +75,15 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--size", default="640x480", type=parse_size)
     parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--lit-only", action="store_true", help="time the lit pipeline only")
     args = parser.parse_args()
     width, height = args.size
     from gpu_shader.raster import rasterise as gpu_rasterise
     from gpu_shader.render import device_name
+    if args.lit_only:
+        lit_frames(width, height, args.repeat)
+        print(f"\ngpu: {device_name()}")
+        return
 
     scenes = {"cube, cone and floor": SCENES["cube and cone on a floor"]}
     for n in (32, 128):
@@ -115,7 +128,57 @@ def main() -> None:
         traced_error = surface_error(frame.depth, frame.hit, width, height)
         print(f"| {n} | {error:.2e} | {1000 * raster_ms:.1f}, {raster_error:.2e} | "
               f"{1000 * traced_ms:.1f}, {traced_error:.2e} |", flush=True)
+    lit_frames(width, height, args.repeat)
     print(f"\ngpu: {device_name()}")
+
+
+def lit_frames(width, height, repeat):
+    """Part 3: the lit raster pipeline's frame times, one row per background kind."""
+    from gpu_shader.raster import RasterRenderer
+    from reference_cpu.raster_shading import shade_raster
+    from scene_model.scene import (Checker, DirectionalLight, Material, PointLight,
+                                   SkyBackground, SolidBackground, SpotLight,
+                                   StudioBackground, Texture)
+    meshes = SCENES["cube and cone on a floor"]
+    materials = [Material(color=(0.8, 0.3, 0.2), ks=0.5, texture=Texture(mapping="uv")),
+                 Material(texture=Texture(scale=0.7)), Material(checker=Checker(scale=0.5))]
+    lights = (PointLight(position=(-3.0, 5.0, 3.0), intensity=1.2, linear=0.02),
+              DirectionalLight(direction=(1.0, -1.0, -0.5), intensity=0.5),
+              SpotLight(position=(2.0, 3.0, 2.0), direction=(-1.0, -1.5, -1.0),
+                        intensity=0.8, diffuse=(1.0, 0.9, 0.7), specular=(0.5, 0.5, 1.0)))
+    backgrounds = {"solid (a clear)": SolidBackground(color=(0.1, 0.1, 0.1)),
+                   "sky gradient": SkyBackground(), "studio cube map": StudioBackground()}
+    renderer = RasterRenderer(meshes)
+    ctx = renderer.ctx
+    colour = np.empty((height, width, 4), np.float32)
+
+    def drawn(settings):
+        fbo = renderer.draw_planes(materials, lights, CAMERA, width, height, **settings)
+        with ctx:                # glFinish on our context: the frame is done, not queued
+            ctx.finish()
+        return fbo
+
+    def shown(settings):         # attachment 3 is the colour (RasterRenderer.draw_planes)
+        fbo = renderer.draw_planes(materials, lights, CAMERA, width, height, **settings)
+        with ctx:
+            fbo.read_into(colour, components=4, attachment=3, dtype="f4")
+
+    print(f"\nThe lit raster pipeline at {width}x{height}: the cube (uv texture), cone "
+          "(triplanar texture) and checkered floor under three lights, ms per frame:\n")
+    print("| background | draw | draw, colour read back | draw, colour and Raster read "
+          "back | NumPy rasterise + shade_raster |")
+    print("|---|---:|---:|---:|---:|")
+    for name, background in backgrounds.items():
+        settings = {"ambient": (0.1, 0.1, 0.1), "background": background}
+        cells = [median_seconds(lambda: drawn(settings), repeat),
+                 median_seconds(lambda: shown(settings), repeat),
+                 median_seconds(lambda: renderer.draw(materials, lights, CAMERA, width,
+                                                      height, **settings), repeat)]
+        cells.append(median_seconds(lambda: shade_raster(
+            rasterise(meshes, CAMERA, width, height), CAMERA, materials, lights,
+            background=background, ambient=(0.1, 0.1, 0.1)), max(1, repeat // 3)))
+        print(f"| {name} | " + " | ".join(f"{1000 * c:.1f}" for c in cells) + " |", flush=True)
+    renderer.release()
 
 
 if __name__ == "__main__":

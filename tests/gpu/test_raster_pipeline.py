@@ -58,13 +58,18 @@ def test_gpu_clips_a_floor_that_runs_behind_the_eye_at_the_near_plane(gpu):
 
 
 def test_gpu_leaves_the_context_as_it_found_it(gpu):
-    """The sphere tracer draws on the same context after the raster pipeline: no depth test
-    or face culling left on, nothing left bound that changes its frame."""
+    """The sphere tracer draws on the same context after the raster pipeline, unlit and lit
+    with a skybox: no depth test, depth function or face culling left changed, nothing left
+    bound that changes its frame."""
     import marchlab
+    from gpu_shader.raster import draw
+    from scene_model.scene import Material, PointLight, StudioBackground
     from scene_model.scenefile import load_scene
     scene = load_scene("classroom")
     before = marchlab.render(scene, 32, 24, backend="gpu")
     gpu_rasterise([uv_sphere(1.0, 16, 8)], CAMERA, 32, 24, cull_back_faces=True)
+    draw([uv_sphere(1.0, 16, 8)], [Material()], [PointLight()], CAMERA, 32, 24,
+         background=StudioBackground(size=8), cull_back_faces=True)
     after = marchlab.render(scene, 32, 24, backend="gpu")
     np.testing.assert_array_equal(after.color, before.color)
     np.testing.assert_array_equal(after.depth, before.depth)
