@@ -33,7 +33,7 @@ demo: $(VENV)/.installed
 # lint-imports checks the four floors (pyproject.toml, [tool.importlinter]) before the suite.
 # The backends named here must run: a test that would skip for one fails instead, naming it
 # (tests/required_backends.py). Without their drivers: make test MARCHLAB_REQUIRE_BACKENDS=
-MARCHLAB_REQUIRE_BACKENDS := gpu,opencl
+MARCHLAB_REQUIRE_BACKENDS := gpu,opencl,raster,embree
 # The `marchlab view` window's tests (tests/view) must run too: imgui-bundle, and Xvfb started
 # by pytest-xvfb. Without a display: make test MARCHLAB_REQUIRE_VIEW=
 MARCHLAB_REQUIRE_VIEW := 1

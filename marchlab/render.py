@@ -118,6 +118,21 @@ def reference_backend(scene: Scene) -> str:
     return "numpy-raster" if scene.meshes else "numpy"
 
 
+def scene_backends(scene: Scene) -> list[str]:
+    """The backends that draw ``scene``: the mesh backends for a scene of triangle meshes,
+    the sphere tracers for the others."""
+    meshes = bool(scene.meshes)
+    return [name for name in BACKENDS if (name in MESH_BACKENDS) == meshes]
+
+
+def fastest_backend_for(scene: Scene) -> str:
+    """The fastest backend that can draw ``scene`` here: `fastest_backend` for an SDF
+    scene; for a scene of meshes the GPU's raster pipeline, else the NumPy rasteriser."""
+    if not scene.meshes:
+        return fastest_backend()
+    return "raster" if backend_problem("raster") is None else "numpy-raster"
+
+
 def backend_problem(backend: str) -> str | None:
     """None if ``backend`` can render on this machine, else one line saying why not."""
     try:

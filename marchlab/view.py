@@ -57,6 +57,7 @@ class CheckResult:
     seconds: float
     opencl: np.ndarray | None = None          # (H, W, 3) uint8, the OpenCL backend's, where
     opencl_failures: list[str] | None = None  # it runs, and its gates against the reference
+    reference_backend: str = "numpy"          # numpy-raster for a scene of meshes
 
 
 class Viewer:
@@ -512,16 +513,17 @@ class Viewer:
         def check():
             start = time.perf_counter()
             from .compare import compare_frames, failures, gates_against
-            from .render import backend_problem, render
+            from .render import backend_problem, reference_backend, render
+            reference_name = reference_backend(scene)
 
             def progress(stage):
                 def report(done, total):
                     self.check_stage, self.check_progress = stage, (done, total)
                 return report
 
-            reference = render(scene, width, height, backend="numpy", path_labels=True,
-                               progress=progress("NumPy reference rendering"))
-            gates = gates_against("float64")
+            reference = render(scene, width, height, backend=reference_name,
+                               path_labels=True, progress=progress("NumPy reference rendering"))
+            gates = gates_against("float64", meshes=bool(scene.meshes))
 
             def against_reference(frame):
                 comparison = compare_frames(reference, frame, epsilon=scene.render.epsilon)
@@ -531,13 +533,13 @@ class Viewer:
             a, b = reference.image(), gpu_frame.image()
             difference = np.clip(np.abs(a.astype(int) - b.astype(int)) * 32, 0, 255)
             opencl = opencl_failures = None
-            if backend_problem("opencl") is None:        # the third backend, where present
+            if not scene.meshes and backend_problem("opencl") is None:   # the third, here
                 frame = render(scene, width, height, backend="opencl", path_labels=True,
                                progress=progress("OpenCL rendering"))
                 opencl, opencl_failures = frame.image(), against_reference(frame)[1]
             self.check = CheckResult(a, b, difference.astype(np.uint8), gpu_failures,
                                      comparison.rows(), time.perf_counter() - start,
-                                     opencl, opencl_failures)
+                                     opencl, opencl_failures, reference_name)
 
         if not background:
             try:

@@ -290,13 +290,14 @@ class View:
         self.viewer = Viewer(scene, size)
         self.viewer.overlay = overlay
         from IPython.utils.capture import capture_output
-        from .render import fastest_backend
+        from .render import fastest_backend_for
         # jupyter-rfb displays an output area of its own (for errors in its callbacks) when
         # a canvas is made; it goes into this view's layout instead, so that a notebook saved
         # without widgets shows the PNG below and not "RFBOutputContext()".
         with capture_output(display=True):
             self.canvas = canvas(self.viewer, markers=markers,
-                                 backend=backend or fastest_backend(), css_width=f"{size[0]}px",
+                                 backend=backend or fastest_backend_for(self.viewer.scene),
+                                 css_width=f"{size[0]}px",
                                  css_height=f"{size[1]}px", resizable=False)
         # The shading mode is always offered; a lesson's own controls come first.
         controls = list(controls) + ["render.shading"] * ("render.shading" not in controls)
@@ -306,9 +307,10 @@ class View:
         self.overlay = widgets.Dropdown(options=list(OVERLAYS), value=overlay,
                                         description="overlay")
         self.overlay.observe(self._set_overlay, names="value")
-        from .render import BACKENDS, backend_problem
+        from .render import backend_problem, scene_backends
         self.backend = widgets.Dropdown(
-            options=[name for name in BACKENDS if backend_problem(name) is None],
+            options=[name for name in scene_backends(self.viewer.scene)
+                     if backend_problem(name) is None],
             value=self.canvas.backend, description="backend")
         self.backend.observe(self._set_backend, names="value")
         self.timing = widgets.Label("")
@@ -354,7 +356,9 @@ class View:
             "" if result.opencl_failures is None else
             f"; OpenCL: {verdict(result.opencl_failures)}")
         import ipywidgets as widgets
-        pictures = [("NumPy reference", result.reference), (self.canvas.backend, result.gpu),
+        reference = {"numpy": "NumPy reference", "numpy-raster": "NumPy rasteriser"}
+        pictures = [(reference[result.reference_backend], result.reference),
+                    (self.canvas.backend, result.gpu),
                     ("difference x32", result.difference)]
         if result.opencl is not None:
             pictures.append(("OpenCL", result.opencl))

@@ -286,11 +286,12 @@ def test_a_physics_view_of_a_scene_without_bodies_is_refused_in_one_line():
 
 
 def test_every_view_offers_the_shading_mode_and_the_backends_that_run_here(view):
-    from marchlab.render import BACKENDS, backend_problem
+    from marchlab.render import MESH_BACKENDS, BACKENDS, backend_problem
     assert view.controls[-1].description == "shading"
     view.controls[-1].value = "normals"
     assert view.viewer.scene.render.shading == "normals"
-    assert list(view.backend.options) == [b for b in BACKENDS if backend_problem(b) is None]
+    assert list(view.backend.options) == [b for b in BACKENDS if backend_problem(b) is None
+                                          and b not in MESH_BACKENDS]
 
 
 def test_flipping_the_backend_draws_the_same_view_with_the_reference(view):
@@ -299,3 +300,17 @@ def test_flipping_the_backend_draws_the_same_view_with_the_reference(view):
     expected = render(view.viewer.drawn_scene(), *SIZE, backend="numpy").image()
     np.testing.assert_array_equal(view.image(), expected)
     assert view.canvas.frame.backend == "numpy"
+
+
+def test_a_mesh_scene_is_drawn_by_the_raster_pipeline_and_checked_against_the_rasteriser():
+    need_backend("raster")
+    from marchlab.render import MESH_BACKENDS
+    from marchlab.widgets import View
+    view = View("meshes", size=SIZE, markers=False)
+    assert view.canvas.backend == "raster"
+    assert set(view.backend.options) <= set(MESH_BACKENDS)
+    view.viewer._last_motion = -math.inf
+    expected = render(view.viewer.drawn_scene(), *SIZE, backend="raster").image()
+    np.testing.assert_array_equal(view.image(), expected)
+    result = view.check()
+    assert result.reference_backend == "numpy-raster" and result.failures == []

@@ -120,7 +120,8 @@ def test_compare_save_writes_four_images_of_the_frame_size(gpu, capsys, tmp_path
 def test_compare_exits_1_and_prints_the_failed_gate(capsys, monkeypatch):
     """With a colour gate of 0, float32 against float64 must fail it (numpy only, no GPU)."""
     import marchlab.compare
-    monkeypatch.setattr(marchlab.compare, "gates_against", lambda precision, meshes=False: Gates(color=0.0))
+    monkeypatch.setattr(marchlab.compare, "gates_against",
+                        lambda precision, meshes=False: Gates(color=0.0))
     code, out, _ = run_cli(capsys, "compare", "classroom", "--size", "32x24", "--a", "numpy",
                            "--a-precision", "float64", "--b", "numpy", "--b-precision", "float32")
     assert code == 1
