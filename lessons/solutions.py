@@ -230,6 +230,33 @@ def beer_lambert(absorption, distance):
     return np.exp(-absorption * np.asarray(distance)[:, None])
 
 
+
+# --- lesson 9 ---------------------------------------------------------------------------------
+
+def edge_function(ax, ay, bx, by, px, py):
+    # All (N,). Return the (N,) edge function of the edges a -> b at the points p.
+    # The 2D cross product (b - a) x (p - a): twice the signed area of the triangle (a, b, p).
+    return (bx - ax) * (py - ay) - (by - ay) * (px - ax)
+
+
+def perspective_correct(weights, z, attributes):
+    # weights : (N, 3) barycentric in the image; z : (N, 3) view depths; attributes (N, 3, A).
+    # Return the (N, A) attribute at the surface point the image point shows.
+    # a / z and 1 / z vary linearly in the image: interpolate both, then divide.
+    over_z = weights / z
+    return np.einsum("ni,nia->na", over_z, attributes) / over_z.sum(axis=1)[:, None]
+
+
+def barycentric(p, a, b, c):
+    # p, a, b, c : (N, 3), p in the plane of the triangle. Return the (N, 3) weights of a, b, c.
+    # Each corner's weight is the signed area of the triangle p makes with the other two
+    # corners, over the whole area; signed along the triangle's normal n.
+    n = np.cross(b - a, c - a)
+    whole = np.sum(n * n, axis=1)              # |n|^2: the area (times 2) measured along n
+    w_a = np.sum(np.cross(c - b, p - b) * n, axis=1) / whole
+    w_b = np.sum(np.cross(a - c, p - c) * n, axis=1) / whole
+    return np.stack([w_a, w_b, 1 - w_a - w_b], axis=-1)
+
 SOLUTIONS = {name: function for name, function in list(globals().items())
              if inspect.isfunction(function) and not name.startswith("_")
              and function.__module__ == __name__}
