@@ -39,8 +39,9 @@ from scene_model.camera import Camera
 from scene_model.meshes import TriangleMesh
 from scene_model.scene import DirectionalLight
 
-from .rasterise import (SUBPIXELS, Raster, clipped_triangles, draw_triangle, edge,
-                        project_corners, ray_stretch)
+from .rasterise import (SUBPIXELS, Raster, clipped_triangle_batch, clipped_triangles,
+                        draw_triangle, draw_triangles, edge, interpolate, project_corner_batch,
+                        project_corners, ray_stretch, winding)
 
 MATCH = 1e-9         # vertices closer than this fraction of a mesh's size are one point
 
@@ -134,8 +135,25 @@ def volume_sides_and_back_cap(mesh: TriangleMesh, light, reach: float) -> Triang
 
 
 def stencil_counts(meshes: list[TriangleMesh], raster: Raster, camera: Camera, light,
-                   method: str = "depth-fail", reach: float | None = None) -> np.ndarray:
+                   method: str = "depth-fail", reach: float | None = None,
+                   textbook: bool = False) -> np.ndarray:
     """The stencil buffer (H, W) after drawing every closed mesh's shadow volume.
+
+    ``textbook=True`` draws the volumes one triangle at a time (`stencil_counts_one_by_one`);
+    by default many at once (`stencil_counts_batched`), the same counts, many times faster.
+    The other parameters are `stencil_counts_one_by_one`'s.
+    """
+    if method not in ("depth-fail", "depth-pass"):
+        raise ValueError(f"method must be 'depth-fail' or 'depth-pass' (got {method!r})")
+    count = stencil_counts_one_by_one if textbook else stencil_counts_batched
+    return count(meshes, raster, camera, light, method, reach)
+
+
+def stencil_counts_one_by_one(meshes: list[TriangleMesh], raster: Raster, camera: Camera,
+                              light, method: str = "depth-fail",
+                              reach: float | None = None) -> np.ndarray:
+    """The stencil buffer (H, W) after drawing every closed mesh's shadow volume, one
+    triangle at a time.
 
     Parameters
     ----------
@@ -157,8 +175,6 @@ def stencil_counts(meshes: list[TriangleMesh], raster: Raster, camera: Camera, l
     (H, W) int64 ndarray
         Nonzero where the surface drawn lies inside a shadow volume.
     """
-    if method not in ("depth-fail", "depth-pass"):
-        raise ValueError(f"method must be 'depth-fail' or 'depth-pass' (got {method!r})")
     height, width = raster.depth.shape
     reach = volume_reach(meshes, light) if reach is None else reach
     stretch = ray_stretch(camera, width, height)
@@ -179,7 +195,7 @@ def stencil_counts(meshes: list[TriangleMesh], raster: Raster, camera: Camera, l
                 continue
             (x0, y0), inside, weights = drawn
             rows, cols = np.nonzero(inside)
-            t = (weights[inside] @ z) * stretch[rows + y0, cols + x0]
+            t = interpolate(weights[inside], z[:, None])[:, 0] * stretch[rows + y0, cols + x0]
             behind = t >= raster.depth[rows + y0, cols + x0]   # the depth test fails
             counted = behind if method == "depth-fail" else ~behind
             step = 1 if is_back_face(image) else -1
@@ -187,6 +203,39 @@ def stencil_counts(meshes: list[TriangleMesh], raster: Raster, camera: Camera, l
                 step = -step
             stencil[rows[counted] + y0, cols[counted] + x0] += step
     return stencil
+
+
+def stencil_counts_batched(meshes: list[TriangleMesh], raster: Raster, camera: Camera,
+                           light, method: str = "depth-fail",
+                           reach: float | None = None) -> np.ndarray:
+    """`stencil_counts_one_by_one`'s counts from all of a mesh's volume triangles at once
+    (`reference_cpu.rasterise.draw_triangles`): each fragment's depth is the same number,
+    and a sum does not depend on the order its terms come in."""
+    height, width = raster.depth.shape
+    reach = volume_reach(meshes, light) if reach is None else reach
+    stretch = ray_stretch(camera, width, height).ravel()
+    surface = raster.depth.ravel()
+    corners = []
+    for mesh in meshes:
+        if neighbours(mesh) is None:
+            continue                                         # open: casts no volume
+        index, cap = clipped_triangle_batch(mesh, camera)
+        _, volume = clipped_triangle_batch(volume_sides_and_back_cap(mesh, light, reach),
+                                           camera)
+        corners += [cap[facing_light(mesh, light)[index]], volume]
+    corners = np.concatenate(corners or [np.zeros((0, 3, 11))])
+    image, z, _, _ = project_corner_batch(corners, camera, width, height)
+    step = np.where(winding(image) > 0, 1, -1)             # +1 a back face, -1 a front one
+    if method == "depth-pass":
+        step = -step
+    stencil = np.zeros(height * width, np.int64)
+    for tri, rows, cols, weights in draw_triangles(image, z, False, (width, height)):
+        pixel = rows * width + cols
+        t = interpolate(weights, z[tri, :, None])[:, 0] * stretch[pixel]
+        behind = t >= surface[pixel]                         # the depth test fails
+        counted = behind if method == "depth-fail" else ~behind
+        np.add.at(stencil, pixel[counted], step[tri[counted]])
+    return stencil.reshape(height, width)
 
 
 def is_back_face(image: np.ndarray) -> bool:

@@ -36,10 +36,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from scene_model.camera import Camera
+from scene_model.geometry import normalize
 from scene_model.meshes import TriangleMesh
 from scene_model.scene import Material
 
-from .rasterise import rasterise
+from .rasterise import (Raster, clipped_triangle_batch, draw_triangles, interpolate,
+                        nearest_first, project_corner_batch, rasterise, ray_stretch)
 from .raster_shading import shade_raster
 
 
@@ -86,21 +88,44 @@ def opaque_pass(meshes, materials, lights, camera, width, height, **shade):
 
 
 def transparent_fragments(meshes, materials, lights, camera: Camera, width: int, height: int,
-                          **shade) -> Fragments:
-    """Every fragment of every transparent triangle (`Fragments`)."""
-    transparent = is_transparent(materials)
-    triangles = [(k, i) for k in np.flatnonzero(transparent)
+                          textbook: bool = False, **shade) -> Fragments:
+    """Every fragment of every transparent triangle (`Fragments`), by triangle from the
+    farthest to the nearest, each's by pixel.
+
+    ``textbook=True`` rasterises and shades each triangle on its own picture
+    (`transparent_fragments_one_by_one`); by default all at once
+    (`transparent_fragments_batched`), the same fragments to the last bit. ``shade`` holds
+    `raster_shading.shade_raster`'s keywords.
+    """
+    find = transparent_fragments_one_by_one if textbook else transparent_fragments_batched
+    return find(meshes, materials, lights, camera, width, height, **shade)
+
+
+def far_to_near(meshes, materials, camera: Camera):
+    """The transparent triangles as (object k, triangle i) pairs (T,) and the place (T,) of
+    each from the farthest (0) to the nearest, by its centroid's distance from the eye."""
+    triangles = [(k, i) for k in np.flatnonzero(is_transparent(materials))
                  for i in range(len(meshes[k].triangles))]
     eye = np.asarray(camera.position, np.float64)
     distance = [np.linalg.norm(meshes[k].positions[meshes[k].triangles[i]].mean(axis=0) - eye)
                 for k, i in triangles]
+    place = np.empty(len(triangles), np.int64)
+    place[np.argsort(distance, kind="stable")[::-1]] = np.arange(len(triangles))
+    return triangles, place
+
+
+def transparent_fragments_one_by_one(meshes, materials, lights, camera: Camera, width: int,
+                                     height: int, **shade) -> Fragments:
+    """Every fragment of every transparent triangle: each triangle rasterised and shaded on
+    a picture of its own, from the farthest to the nearest."""
+    triangles, place = far_to_near(meshes, materials, camera)
     parts = []
-    for order, index in enumerate(np.argsort(distance, kind="stable")[::-1]):
+    for order, index in enumerate(np.argsort(place)):
         k, i = triangles[index]
         alone = keep_only(meshes, np.arange(len(meshes)) == k)
         mesh = alone[k]
         alone[k] = TriangleMesh(mesh.positions, mesh.normals, mesh.uvs, mesh.triangles[i:i + 1])
-        raster = rasterise(alone, camera, width, height)
+        raster = rasterise(alone, camera, width, height, textbook=True)
         if not raster.hit.any():
             continue
         color = shade_raster(raster, camera, materials, lights, **shade)
@@ -112,6 +137,75 @@ def transparent_fragments(meshes, materials, lights, camera: Camera, width: int,
         return Fragments(np.zeros(0, int), np.zeros(0), np.zeros((0, 3)), np.zeros(0),
                          np.zeros(0, int))
     return Fragments(*(np.concatenate(column) for column in zip(*parts)))
+
+
+def transparent_fragments_batched(meshes, materials, lights, camera: Camera, width: int,
+                                  height: int, **shade) -> Fragments:
+    """`transparent_fragments_one_by_one`'s fragments from all the transparent triangles
+    drawn at once (`reference_cpu.rasterise.draw_triangles`), then shaded a layer at a time:
+    layer n holds each pixel's n-th fragment, so that a layer is a `Raster` with at most
+    one surface a pixel, and one `shade_raster` call shades all its fragments."""
+    triangles, place = far_to_near(meshes, materials, camera)
+    first = {}                                  # where mesh k's triangles start in place
+    for n, (k, i) in enumerate(triangles):
+        first.setdefault(k, n)
+    stretch = ray_stretch(camera, width, height).ravel()
+    parts = []
+    for k in first:
+        index, corners = clipped_triangle_batch(meshes[k], camera)
+        image, z, normals, uvs = project_corner_batch(corners, camera, width, height)
+        for tri, rows, cols, weights in draw_triangles(image, z, False, (width, height)):
+            pixel = rows * width + cols
+            parts.append(dict(pixel=pixel, order=place[first[k] + index[tri]],
+                              depth=interpolate(weights, z[tri, :, None])[:, 0] * stretch[pixel],
+                              normal=normalize(interpolate(weights, normals[tri])),
+                              uv=interpolate(weights, uvs[tri]), object=np.full(len(tri), k),
+                              triangle=index[tri]))
+    if not parts:
+        return Fragments(np.zeros(0, int), np.zeros(0), np.zeros((0, 3)), np.zeros(0),
+                         np.zeros(0, int))
+    f = {name: np.concatenate([part[name] for part in parts]) for name in parts[0]}
+    # Each triangle on a picture of its own: one fragment a pixel (a triangle cut in two at
+    # the near plane has two pieces), the one its depth test keeps.
+    _, key = np.unique(f["order"] * (width * height) + f["pixel"], return_inverse=True)
+    kept = nearest_first(key, f["depth"])
+    kept = kept[f["depth"][kept] < np.inf]
+    kept = kept[np.lexsort((f["pixel"][kept], f["order"][kept]))]   # by triangle, by pixel
+    f = {name: value[kept] for name, value in f.items()}
+    color = np.zeros((len(kept), 3))
+    layer = layers_of(f["pixel"])
+    for n in range(layer.max(initial=-1) + 1):
+        rows = np.flatnonzero(layer == n)
+        # The background shows only where nothing is drawn: on none of these pixels.
+        shaded = shade_raster(layer_raster(f, rows, width, height), camera, materials, lights,
+                              **dict(shade, background=(0.0, 0.0, 0.0)))
+        color[rows] = shaded.reshape(-1, 3)[f["pixel"][rows]]
+    alpha = 1.0 - np.array([m.transparency for m in materials])[f["object"]]
+    return Fragments(f["pixel"], f["depth"], color, alpha, f["order"])
+
+
+def layers_of(pixel: np.ndarray) -> np.ndarray:
+    """(F,) int: for each fragment, how many fragments before it fall on its pixel."""
+    by_pixel = np.argsort(pixel, kind="stable")
+    sorted_pixel = pixel[by_pixel]
+    starts = np.flatnonzero(np.r_[True, sorted_pixel[1:] != sorted_pixel[:-1]])
+    run = np.diff(np.r_[starts, len(pixel)])
+    layer = np.empty(len(pixel), np.int64)
+    layer[by_pixel] = np.arange(len(pixel)) - np.repeat(starts, run)
+    return layer
+
+
+def layer_raster(f: dict, rows: np.ndarray, width: int, height: int) -> Raster:
+    """The `Raster` of the fragments ``rows`` of ``f`` (at most one a pixel)."""
+    pixels = width * height
+    depth, normal, uv = np.full(pixels, np.inf), np.zeros((pixels, 3)), np.zeros((pixels, 2))
+    object_id, triangle = np.full(pixels, -1, np.int64), np.full(pixels, -1, np.int64)
+    p = f["pixel"][rows]
+    depth[p], normal[p], uv[p] = f["depth"][rows], f["normal"][rows], f["uv"][rows]
+    object_id[p], triangle[p] = f["object"][rows], f["triangle"][rows]
+    return Raster(depth.reshape(height, width), normal.reshape(height, width, 3),
+                  uv.reshape(height, width, 2), object_id.reshape(height, width),
+                  triangle.reshape(height, width), None)
 
 
 def sorted_blend(meshes: list[TriangleMesh], materials: list[Material], lights,

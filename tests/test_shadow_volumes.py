@@ -12,12 +12,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+import marchlab
 from marchlab.compare import boundary, dilate
 from reference_cpu.rasterise import rasterise
 from reference_cpu.shadow_map import surface_points
 from reference_cpu.shadow_volumes import (facing_light, neighbours, shadow_volume_visibility,
                                           silhouette_edges, stencil_counts,
                                           volume_sides_and_back_cap)
+from reference_cpu.transparency import is_transparent, keep_only
+from scene_model.mesh_world import scene_meshes
 from scene_model.meshes import PRIMITIVES, TriangleMesh, cube, disk, merged, plane
 from scene_model.scene import Camera, DirectionalLight, PointLight
 
@@ -153,3 +156,33 @@ def test_unknown_counting_method_is_refused():
     raster = rasterise(meshes, camera, 8, 6)
     with pytest.raises(ValueError, match="depth-fail"):
         stencil_counts(meshes, raster, camera, OVERHEAD, method="z-fail")
+
+
+@pytest.mark.parametrize("method", ["depth-fail", "depth-pass"])
+def test_batched_stencil_counts_are_the_loop_s_on_the_museum(method):
+    """Every light of the museum (directional, point, spot), its opaque closed meshes
+    casting: the same count on every pixel, drawn many triangles at once or one by one."""
+    scene = marchlab.load_scene("museum")
+    meshes, materials = scene_meshes(scene)
+    opaque = keep_only(meshes, ~is_transparent(materials))
+    casters = [m if neighbours(m) is not None else keep_only([m], [False])[0] for m in opaque]
+    raster = rasterise(opaque, scene.camera, 64, 48)
+    for light in scene.lights:
+        fast = stencil_counts(casters, raster, scene.camera, light, method)
+        assert (fast != 0).sum() > 20
+        np.testing.assert_array_equal(
+            fast, stencil_counts(casters, raster, scene.camera, light, method, textbook=True))
+
+
+def test_batched_stencil_counts_are_the_loop_s_with_the_eye_in_the_shadow():
+    """The volume the eye stands in crosses the near plane: its faces are clipped, and the
+    counts (depth-pass off by one) are still the loop's."""
+    light = DirectionalLight(direction=(1.0, -0.3, 0.0))
+    camera = Camera(position=(2.0, 0.3, 0.0), look_at=(4.0, 0.0, 1.0), fov=60.0)
+    meshes = [moved(cube(1.0), (0.0, 0.5, 0.0)), plane(8.0, 8.0, subdivisions=4)]
+    raster = rasterise(meshes, camera, WIDTH, HEIGHT)
+    for method in ("depth-fail", "depth-pass"):
+        fast = stencil_counts(meshes, raster, camera, light, method)
+        assert (fast != 0).sum() > 1000
+        np.testing.assert_array_equal(
+            fast, stencil_counts(meshes, raster, camera, light, method, textbook=True))

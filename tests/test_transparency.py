@@ -1,18 +1,23 @@
 """Transparency in the NumPy raster reference (`reference_cpu.transparency`): one pane against
 Porter and Duff's "over" written out, depth peeling's independence of the order triangles
-come in, and what too few peeling passes drop. Against the ray-cast truth:
-tests/truth/test_raster_transparency_against_embree.py.
+come in, and what too few peeling passes drop; the batched fragments
+(`transparent_fragments_batched`) are the one-triangle-at-a-time ones, bit for bit. Against
+the ray-cast truth: tests/truth/test_raster_transparency_against_embree.py.
 """
 
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
+import marchlab
 from mesh_scenes import CAMERA, turned
-from reference_cpu.rasterise import rasterise
+from reference_cpu.rasterise import clipped_triangle_batch, rasterise
 from reference_cpu.raster_shading import shade_raster
 from reference_cpu.transparency import (depth_complexity, depth_peel, opaque_pass,
                                         sorted_blend, transparent_fragments)
+from scene_model.camera import Camera
+from scene_model.mesh_world import scene_meshes
 from scene_model.meshes import TriangleMesh, cube, plane, transformed, uv_sphere
 from scene_model.scene import DirectionalLight, Material, PointLight
 
@@ -105,3 +110,49 @@ def test_too_few_passes_change_exactly_the_pixels_with_more_layers():
         changed = np.abs(fewer - full).max(axis=-1) > 1e-12
         assert (layers > k).any()
         np.testing.assert_array_equal(changed, layers > k)
+
+
+def assert_same_fragments(fast, loop):
+    """Two `Fragments` equal field by field, in the same order, bit for bit."""
+    for name in ("pixel", "depth", "color", "alpha", "order"):
+        a, b = getattr(fast, name), getattr(loop, name)
+        assert a.dtype == b.dtype and a.shape == b.shape, name
+        assert a.tobytes() == b.tobytes(), f"{name}: {np.sum(a != b)} values differ"
+
+
+@pytest.mark.parametrize("model", ["phong", "toon", "normals"])
+@pytest.mark.parametrize("scene", ["separate", "crossed"])
+def test_batched_fragments_are_the_one_by_one_fragments(scene, model):
+    meshes, materials = SEPARATE if scene == "separate" else CROSSED
+    shade = dict(SHADE, model=model)
+    fast = transparent_fragments(meshes, materials, LIGHTS, CAMERA, WIDTH, HEIGHT, **shade)
+    assert len(fast.pixel) > 1000
+    assert_same_fragments(fast, transparent_fragments(meshes, materials, LIGHTS, CAMERA, WIDTH,
+                                                      HEIGHT, textbook=True, **shade))
+
+
+def test_batched_fragments_are_the_one_by_one_fragments_through_the_near_plane():
+    """The eye half a millimetre from a pane, looking along it: one of its triangles is cut
+    at the near plane into two pieces that make one picture."""
+    meshes, materials = SEPARATE
+    camera = Camera(position=(-0.3, 0.7, 0.6005), look_at=(-2.0, 0.6, 0.0), fov=100.0)
+    index, _ = clipped_triangle_batch(meshes[2], camera)
+    assert len(index) == 3 and len(np.unique(index)) == 2
+    fast = transparent_fragments(meshes, materials, LIGHTS, camera, 48, 36, **SHADE)
+    assert len(fast.pixel) > 200
+    assert_same_fragments(fast, transparent_fragments(meshes, materials, LIGHTS, camera, 48, 36,
+                                                      textbook=True, **SHADE))
+
+
+def test_batched_fragments_are_the_one_by_one_fragments_in_the_museum():
+    """The museum's glass under its own lights and skybox background."""
+    scene = marchlab.load_scene("museum")
+    meshes, materials = scene_meshes(scene)
+    r = scene.render
+    shade = dict(ambient=r.ambient, model=r.shading, background=r.background,
+                 toon_bands=r.toon_bands)
+    fast = transparent_fragments(meshes, materials, scene.lights, scene.camera, 64, 48, **shade)
+    assert len(fast.pixel) > 100
+    assert_same_fragments(fast, transparent_fragments(meshes, materials, scene.lights,
+                                                      scene.camera, 64, 48, textbook=True,
+                                                      **shade))
