@@ -28,6 +28,7 @@ from .planar_reflection import reflect_through
 from .rasterise import Raster, rasterise
 from .raster_shading import shade_raster
 from .render import path_step
+from .shadow_map import shadow_map_visibility
 from .shadow_volumes import neighbours, shadow_volume_visibility
 from .transparency import (blend_sorted, depth_complexity, is_transparent, keep_only,
                            peel_layers, transparent_fragments)
@@ -53,6 +54,10 @@ class SurfaceFinder:
         ``reflection(meshes, k, raster, stencil, materials, lights, camera, shade) ->
         (color (H, W, 3), object (H, W), triangle (H, W))``: what mirror mesh ``k`` shows on
         the ``stencil`` pixels, one bounce, and which object and triangle (-1: none).
+    shadow_map : callable or None
+        ``shadow_map(meshes, raster, camera, light, render) -> (H, W)``: visibility by a
+        shadow map (``render.shadow_method = "map"``); None for a backend that has only
+        exact shadows (the ray caster).
     transparency : callable
         ``transparency(meshes, materials, lights, camera, color, depth, render, shade) ->
         (color (H, W, 3), layers (H, W))``: the transparent ``meshes`` (the others emptied)
@@ -65,6 +70,7 @@ class SurfaceFinder:
     visibility: Callable
     reflection: Callable
     transparency: Callable
+    shadow_map: Callable | None = None
 
 
 def draw(scene: Scene, width: int, height: int, finder: SurfaceFinder) -> Frame:
@@ -73,7 +79,8 @@ def draw(scene: Scene, width: int, height: int, finder: SurfaceFinder) -> Frame:
     1. the opaque meshes' first hits (``finder.first_hits``);
     2. with ``render.shadows`` on, each light's visibility, the closed opaque meshes casting
        (``finder.visibility``: shadow volumes need closed casters, and the ray-cast truth
-       takes the same ones, so both find the same shadows);
+       takes the same ones, so both find the same shadows), or with ``render.shadow_method
+       = "map"`` every opaque mesh (``finder.shadow_map``);
     3. the shading (`picture`): the sphere tracer's functions, lights and background;
     4. with ``render.reflection_depth`` > 0, each flat mirror (kr > 0) adds kr times what it
        reflects (``finder.reflection``), as the sphere tracer adds it;
@@ -90,8 +97,13 @@ def draw(scene: Scene, width: int, height: int, finder: SurfaceFinder) -> Frame:
     if r.shadows != "none":
         casters = [m if neighbours(m) is not None else keep_only([m], [False])[0]
                    for m in opaque]
-        visibility = [finder.visibility(casters, raster, scene.camera, light)
-                      for light in scene.lights]
+        if r.shadow_method == "map" and finder.shadow_map is not None:
+            # A map needs no closed casters: every opaque mesh is drawn into it.
+            visibility = [finder.shadow_map(opaque, raster, scene.camera, light, r)
+                          for light in scene.lights]
+        else:
+            visibility = [finder.visibility(casters, raster, scene.camera, light)
+                          for light in scene.lights]
     color = picture(scene, materials, raster, visibility)
     lit = r.shading in LIT_SHADING
     shade = dict(ambient=r.ambient, model=r.shading, background=r.background,
@@ -143,10 +155,17 @@ def _blend(meshes, materials, lights, camera, color, depth, render, shade):
     return peel_layers(fragments, color, depth, render.peel_layers), layers
 
 
-# The readable reference: the NumPy rasteriser, shadow volumes counted per pixel, the mirrored
-# scene drawn through the mirror's pixels, transparent fragments peeled or sorted.
+def _shadow_map(meshes, raster, camera, light, render):
+    return shadow_map_visibility(meshes, raster, camera, light, render.shadow_map_size,
+                                 render.shadow_bias, render.shadow_slope_bias,
+                                 render.shadow_pcf)
+
+
+# The readable reference: the NumPy rasteriser, shadow volumes counted per pixel (or a shadow
+# map), the mirrored scene drawn through the mirror's pixels, transparent fragments peeled or
+# sorted.
 NUMPY_RASTER = SurfaceFinder("numpy-raster", "float64", rasterise, shadow_volume_visibility,
-                             _mirror, _blend)
+                             _mirror, _blend, _shadow_map)
 
 
 def check_mesh_scene(scene: Scene, backend: str) -> None:

@@ -389,6 +389,23 @@ class RenderSettings(Record):
                                      "after the first hit.", Range(0, MAX_REFLECTION_DEPTH))
     fresnel: Literal["exact", "schlick"] = param(
         "exact", "Glass: Fresnel's equations, or Schlick's approximation of them.")
+    shadow_method: Literal["volumes", "map"] = param(
+        "volumes", "Meshes: how the raster backends find shadows, by shadow volumes (exact: "
+                   "the pixels a shadow ray finds) or by a shadow map (a depth picture from "
+                   "the light, with its acne, peter-panning and aliasing; "
+                   "docs/raster-shadows.md). The embree backend casts shadow rays.")
+    shadow_map_size: int = param(2048, "Meshes, shadow map: texels along each side.",
+                                 Range(16, 8192))
+    shadow_bias: float = param(1e-3, "Meshes, shadow map: metres a stored depth is pushed "
+                                     "away from the light before the test (against acne).",
+                               Range(0.0, 10.0))
+    shadow_slope_bias: float = param(1.5, "Meshes, shadow map: more bias on surfaces tilted "
+                                          "from the light, in texels of slope.",
+                                     Range(0.0, 100.0))
+    shadow_pcf: int = param(1, "Meshes, shadow map: percentage-closer filtering over n x n "
+                               "texels (odd; 1: the plain test).",
+                            Rule(lambda v: 1 <= v <= 15 and v % 2 == 1,
+                                 "must be an odd number from 1 to 15", "1, 3, ..., 15"))
     blending: Literal["depth_peeling", "sorted"] = param(
         "depth_peeling", "Meshes: how transparent surfaces are blended over what is behind "
                          "them, peeled nearest first (order-independent, Everitt 2001) or "
