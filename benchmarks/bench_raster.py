@@ -13,13 +13,21 @@ rasterisation at equal geometric error.
    each frame's surface error: how far from the exact sphere the point it shows lies,
    | |o + t d| - 1 |, largest over the pixels it hits.
 
-3. The lit raster pipeline (`gpu_shader.raster.RasterRenderer`: meshes uploaded once, a
+3. The lit raster pipeline (`gpu_shader.raster_lit.RasterRenderer`: meshes uploaded once, a
    shader generated for the scene, the skybox drawn last): ms per frame of the cube, cone
    and floor with a uv texture, a triplanar one and a checkerboard under a point, a
    directional and a coloured spot light, against each background kind; the draw alone
    (until glFinish returns), with the colour read back (what a viewer shows), and with
    every plane read back into a colour and a `Raster`; and NumPy's rasteriser and
    `shade_raster` for the same frame. ``--lit-only`` runs this part alone.
+
+4. The ``museum`` scene (shadows of three lights, a mirror, a glass pane, a skybox) through
+   the three mesh backends: numpy-raster and embree (`marchlab.render`), and the raster
+   backend both as `marchlab.render` makes a frame (a new `MeshRenderer`, programs already
+   compiled), with its renderer kept (`MeshRenderer.frame`: draw, read-back, path labels)
+   and as a live view draws it (`MeshRenderer.draw`: buffers, shadow volumes and textures
+   kept on the GPU, nothing read back, until glFinish returns). ``--museum-only`` runs this
+   part alone.
 
 Medians of ``--repeat`` frames after one warm-up; machines are shared and noisy, so compare
 the ratios of one run.
@@ -76,10 +84,16 @@ def main() -> None:
     parser.add_argument("--size", default="640x480", type=parse_size)
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--lit-only", action="store_true", help="time the lit pipeline only")
+    parser.add_argument("--museum-only", action="store_true",
+                        help="time the museum through the three mesh backends only")
     args = parser.parse_args()
     width, height = args.size
     from gpu_shader.raster import rasterise as gpu_rasterise
     from gpu_shader.render import device_name
+    if args.museum_only:
+        museum_frames(width, height, args.repeat)
+        print(f"\ngpu: {device_name()}")
+        return
     if args.lit_only:
         lit_frames(width, height, args.repeat)
         print(f"\ngpu: {device_name()}")
@@ -129,12 +143,41 @@ def main() -> None:
         print(f"| {n} | {error:.2e} | {1000 * raster_ms:.1f}, {raster_error:.2e} | "
               f"{1000 * traced_ms:.1f}, {traced_error:.2e} |", flush=True)
     lit_frames(width, height, args.repeat)
+    museum_frames(width, height, args.repeat)
     print(f"\ngpu: {device_name()}")
+
+
+def museum_frames(width, height, repeat):
+    """Part 4: the museum through the three mesh backends, ms per frame and frames per second."""
+    import marchlab
+    from gpu_shader.raster_render import MeshRenderer
+    from marchlab import load_scene
+    scene = load_scene("museum")
+    renderer = MeshRenderer(scene)
+    rows = {
+        "numpy-raster (marchlab.render)": (lambda: marchlab.render(
+            scene, width, height, backend="numpy-raster"), max(1, repeat // 3)),
+        "embree (marchlab.render)": (lambda: marchlab.render(
+            scene, width, height, backend="embree"), repeat),
+        "raster (marchlab.render: new renderer, read-back)": (lambda: marchlab.render(
+            scene, width, height, backend="raster"), repeat),
+        "raster, renderer kept: draw, read-back, path labels": (lambda: renderer.frame(
+            scene, width, height), repeat),
+        "raster, live view: draw only": (lambda: renderer.draw(scene, width, height), repeat),
+    }
+    print(f"\nThe museum at {width}x{height}: shadows of three lights, a mirror, a glass "
+          "pane, a skybox:\n")
+    print("| backend | ms per frame | frames per second |")
+    print("|---|---:|---:|")
+    for name, (run, times) in rows.items():
+        seconds = median_seconds(run, times)
+        print(f"| {name} | {1000 * seconds:.1f} | {1 / seconds:.1f} |", flush=True)
+    renderer.release()
 
 
 def lit_frames(width, height, repeat):
     """Part 3: the lit raster pipeline's frame times, one row per background kind."""
-    from gpu_shader.raster import RasterRenderer
+    from gpu_shader.raster_lit import RasterRenderer
     from reference_cpu.raster_shading import shade_raster
     from scene_model.scene import (Checker, DirectionalLight, Material, PointLight,
                                    SkyBackground, SolidBackground, SpotLight,

@@ -86,56 +86,108 @@ def volume_triangles(mesh: TriangleMesh, light) -> np.ndarray:
                            mesh.triangles[~lit] + count]).astype(np.int32)
 
 
+class ShadowVolumes:
+    """The shadow volumes of one list of meshes on one context, kept on the GPU between
+    frames: the meshes' depth buffers uploaded once, each light's volumes built again only
+    when the light changes (a moved camera needs none: the volumes are in world space), the
+    depth and count textures made once per size. `draw` draws a frame's counts.
+
+    Parameters
+    ----------
+    meshes : list of TriangleMesh
+        Every opaque mesh, in world coordinates: all of them write depth, the closed ones
+        (`reference_cpu.shadow_volumes.neighbours`) cast.
+    ctx : moderngl.Context
+    """
+
+    def __init__(self, meshes: list[TriangleMesh], ctx):
+        self.ctx = ctx
+        self.meshes = [m for m in meshes if len(m.triangles)]
+        self.closed = [neighbours(m) is not None for m in self.meshes]
+        self.program = _program(ctx)
+        self.scene = [_upload(ctx, self.program, np.c_[m.positions, np.ones(len(m.positions))],
+                              m.triangles) for m in self.meshes]
+        self.volumes: dict = {}             # (mesh index, light): its volume's GL objects
+        self.targets: dict = {}             # (W, H, lights): depth, counts, framebuffers
+
+    def draw(self, lights, camera: Camera, width: int, height: int) -> ShadowCounts:
+        """Draw the scene's depth and every light's shadow volumes (the textures returned
+        belong to this object: drawn again next frame, released by `release`)."""
+        ctx, program = self.ctx, self.program
+        depth, counts, scene, fbos = self._target(width, height, len(lights))
+        try:
+            _set_camera(program, camera, width, height)
+            program["depth_scale"].value = DEPTH_SCALE
+            scene.use()
+            scene.viewport = (0, 0, width, height)
+            scene.clear(depth=1.0)
+            ctx.enable(ctx.DEPTH_TEST)
+            ctx.front_face = "cw"                  # drawn upside down (gpu_shader/raster.py)
+            for _, _, vao in self.scene:           # every mesh writes depth, closed or not
+                vao.render()
+            ctx.depth_func = ">="                  # depth-fail: count where LESS fails
+            ctx.enable(ctx.BLEND)
+            ctx.blend_func = ctx.ONE, ctx.ONE
+            ctx.blend_equation = ctx.FUNC_ADD
+            for light, fbo in zip(lights, fbos):
+                fbo.use()
+                fbo.viewport = (0, 0, width, height)
+                fbo.depth_mask = False
+                fbo.clear(0.0, 0.0, 0.0, 0.0)
+                for k, mesh in enumerate(self.meshes):
+                    if self.closed[k]:
+                        self._volume(k, light).render()
+                fbo.depth_mask = True
+        finally:
+            ctx.disable(ctx.DEPTH_TEST | ctx.BLEND)
+            ctx.depth_func = "<"
+            ctx.blend_func = ctx.DEFAULT_BLENDING
+            ctx.front_face = "ccw"
+        return ShadowCounts(depth, counts)
+
+    def release(self, keep=()) -> None:
+        """Free every GL object made here but the textures in ``keep``."""
+        made = [o for objects in [*self.scene, *self.volumes.values()] for o in objects]
+        for depth, counts, scene, fbos in self.targets.values():
+            made += [*fbos, scene] + [t for t in [depth, *counts] if t not in keep]
+        for gl_object in made:
+            gl_object.release()
+        self.scene, self.volumes, self.targets = [], {}, {}
+
+    def _volume(self, k: int, light):
+        """The vertex array of mesh k's volume for ``light``, built when the light is new."""
+        key = (k, repr(light))
+        if key not in self.volumes:
+            for old in [old for old in self.volumes if old[0] == k]:
+                for gl_object in self.volumes.pop(old):
+                    gl_object.release()
+            mesh = self.meshes[k]
+            self.volumes[key] = _upload(self.ctx, self.program, volume_vertices(mesh, light),
+                                        volume_triangles(mesh, light))
+        return self.volumes[key][2]
+
+    def _target(self, width: int, height: int, lights: int):
+        key = (width, height, lights)
+        if key not in self.targets:
+            depth = self.ctx.depth_texture((width, height))
+            counts = [self.ctx.texture((width, height), 1, dtype="f4") for _ in range(lights)]
+            self.targets[key] = (depth, counts, self.ctx.framebuffer(depth_attachment=depth),
+                                 [self.ctx.framebuffer(color_attachments=[c],
+                                                       depth_attachment=depth) for c in counts])
+        return self.targets[key]
+
+
 def draw_shadow_counts(ctx, meshes: list[TriangleMesh], lights, camera: Camera, width: int,
                        height: int) -> ShadowCounts:
     """Draw the scene's depth and every light's shadow volumes; leave the counts on the GPU
     (for a lit pass to sample). The caller releases the returned textures."""
-    program = _program(ctx)
-    depth = ctx.depth_texture((width, height))
-    counts = [ctx.texture((width, height), 1, dtype="f4") for _ in lights]
-    made = []
+    volumes = ShadowVolumes(meshes, ctx)
+    drawn = None
     try:
-        _set_camera(program, camera, width, height)
-        program["depth_scale"].value = DEPTH_SCALE
-        scene = ctx.framebuffer(depth_attachment=depth)
-        made.append(scene)
-        scene.use()
-        scene.viewport = (0, 0, width, height)
-        scene.clear(depth=1.0)
-        ctx.enable(ctx.DEPTH_TEST)
-        ctx.front_face = "cw"                      # drawn upside down (gpu_shader/raster.py)
-        closed = [neighbours(mesh) is not None for mesh in meshes]
-        for mesh in meshes:                        # every mesh writes depth, closed or not
-            vertices = np.c_[mesh.positions, np.ones(len(mesh.positions))]
-            made += _draw(ctx, program, vertices.astype(np.float32), mesh.triangles)
-        ctx.depth_func = ">="                      # depth-fail: count where LESS fails
-        ctx.enable(ctx.BLEND)
-        ctx.blend_func = ctx.ONE, ctx.ONE
-        ctx.blend_equation = ctx.FUNC_ADD
-        for light, count in zip(lights, counts):
-            fbo = ctx.framebuffer(color_attachments=[count], depth_attachment=depth)
-            made.append(fbo)
-            fbo.use()
-            fbo.viewport = (0, 0, width, height)
-            fbo.depth_mask = False
-            fbo.clear(0.0, 0.0, 0.0, 0.0)
-            for mesh, is_closed in zip(meshes, closed):
-                if is_closed:
-                    made += _draw(ctx, program, volume_vertices(mesh, light),
-                                  volume_triangles(mesh, light))
-            fbo.depth_mask = True
-    except BaseException:
-        for texture in [depth, *counts]:
-            texture.release()
-        raise
+        drawn = volumes.draw(lights, camera, width, height)
     finally:
-        ctx.disable(ctx.DEPTH_TEST | ctx.BLEND)
-        ctx.depth_func = "<"
-        ctx.blend_func = ctx.DEFAULT_BLENDING
-        ctx.front_face = "ccw"
-        for gl_object in reversed(made):
-            gl_object.release()
-    return ShadowCounts(depth, counts)
+        volumes.release(keep=[drawn.depth, *drawn.counts] if drawn else ())
+    return drawn
 
 
 def shadow_volume_visibility(meshes: list[TriangleMesh], lights, camera: Camera, width: int,
@@ -167,11 +219,10 @@ def _program(ctx):
     return _programs[id(ctx)]
 
 
-def _draw(ctx, program, vertices: np.ndarray, triangles: np.ndarray) -> list:
-    """Draw indexed triangles of homogeneous vertices (N, 4); the GL objects made."""
+def _upload(ctx, program, vertices: np.ndarray, triangles: np.ndarray) -> tuple:
+    """Indexed triangles of homogeneous vertices (N, 4) on the GPU: (vbo, ibo, vao)."""
     vbo = ctx.buffer(np.ascontiguousarray(vertices, np.float32).tobytes())
     ibo = ctx.buffer(np.ascontiguousarray(triangles, np.int32).tobytes())
     vao = ctx.vertex_array(program, [(vbo, "4f", "position")], index_buffer=ibo,
                            index_element_size=4)
-    vao.render()
-    return [vbo, ibo, vao]
+    return vbo, ibo, vao

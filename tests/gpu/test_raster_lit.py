@@ -1,4 +1,4 @@
-"""The lit raster pipeline on the GPU (`gpu_shader.raster.draw`) against the NumPy shading of
+"""The lit raster pipeline on the GPU (`gpu_shader.raster_lit.draw`) against the NumPy shading of
 raster pictures (`reference_cpu.raster_shading.shade_raster`), pixel by pixel.
 
 Two comparisons. With the GPU's own planes, shade_raster shades exactly the surfaces the GPU
@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gpu_shader.raster import RasterRenderer, draw
+from gpu_shader.raster_lit import RasterRenderer, draw
 from marchlab import render
 from marchlab.compare import boundary, dilate
 from mesh_scenes import CAMERA, HEIGHT, SCENES, WIDTH, turned
@@ -208,8 +208,8 @@ def test_a_renderer_draws_later_frames_as_fresh_draws_do(gpu):
 
 def test_bad_arguments_are_refused_in_one_line(gpu):
     meshes = SCENES["sphere"]
-    with pytest.raises(ValueError, match="unknown shading model 'depth'"):
-        draw(meshes, MATERIALS[:1], ALL_LIGHTS, CAMERA, 16, 12, model="depth")
+    with pytest.raises(ValueError, match="unknown shading model 'steps'"):
+        draw(meshes, MATERIALS[:1], ALL_LIGHTS, CAMERA, 16, 12, model="steps")
     with pytest.raises(ValueError, match="expected 3 visibility planes, got 1"):
         draw(meshes, MATERIALS[:1], ALL_LIGHTS, CAMERA, 16, 12, visibility=[None])
     with pytest.raises(ValueError, match=r"must be \(12, 16\) arrays"):

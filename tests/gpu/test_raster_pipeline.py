@@ -62,7 +62,7 @@ def test_gpu_leaves_the_context_as_it_found_it(gpu):
     with a skybox: no depth test, depth function or face culling left changed, nothing left
     bound that changes its frame."""
     import marchlab
-    from gpu_shader.raster import draw
+    from gpu_shader.raster_lit import draw
     from scene_model.scene import Material, PointLight, StudioBackground
     from scene_model.scenefile import load_scene
     scene = load_scene("classroom")

@@ -1,10 +1,10 @@
-{# A template: gpu_shader/raster.py (lit_shaders) fills it in for one background (Jinja). #}
+{# A template: gpu_shader/raster_lit.py (lit_shaders) fills it in for one background (Jinja). #}
 {% from "raster/view.glsl" import banner, camera %}
 {{ prelude }}
 // The raster pipeline's skybox: what a pixel that no triangle covers shows, the scene's
 // {{ kind }} background looked up along the pixel's ray with the sphere tracer's own functions
 // (glsl/pipeline/background.glsl), as reference_cpu/raster_shading.py's shade_raster does
-// in NumPy. Alpha 0 marks the pixel as a miss (gpu_shader/raster.py reads it back).
+// in NumPy. Alpha 0 marks the pixel as a miss (gpu_shader/raster_lit.py reads it back).
 
 {{ camera() }}
 {% if kind == "sky" %}
@@ -22,6 +22,12 @@ uniform vec3 environment_look;
 {{ texel_reader | trim }}
 {% endif %}
 
+{% if mirrored %}
+// The mirrored pass's background: what the reflected ray H d sees (reference_cpu/
+// planar_reflection.py, reflect_through).
+uniform mat4 mirror;
+{% endif %}
+
 layout(location = 0) out vec4 out_color;
 {% for title, text in sections %}
 
@@ -31,5 +37,9 @@ layout(location = 0) out vec4 out_color;
 
 void main()
 {
+{% if mirrored %}
+    out_color = vec4(background(mat3(mirror) * camera_ray(gl_FragCoord.x, gl_FragCoord.y)), 0.0);
+{% else %}
     out_color = vec4(background(camera_ray(gl_FragCoord.x, gl_FragCoord.y)), 0.0);
+{% endif %}
 }
