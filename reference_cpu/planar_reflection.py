@@ -35,6 +35,8 @@ sphere tracer's mirror rays do too); it must be flat (`mirror_plane` refuses a c
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from scene_model.camera import Camera, camera_rays
@@ -92,13 +94,20 @@ def clip_to_plane(mesh: TriangleMesh, point, normal) -> TriangleMesh:
     texture coordinates interpolated along the cut edges (normals renormalised later, when
     the mesh is transformed). Corners are kept in order, so the winding stays outward.
     """
+    return clipped_with_origin(mesh, point, normal)[0]
+
+
+def clipped_with_origin(mesh: TriangleMesh, point, normal):
+    """`clip_to_plane`'s mesh, and the index (T',) of the triangle of ``mesh`` each of its
+    triangles was cut from: a picture of the clipped mesh names the original triangles."""
     signed = (mesh.positions - np.asarray(point, np.float64)) @ np.asarray(normal, np.float64)
     attributes = np.concatenate([mesh.positions, mesh.normals, mesh.uvs], axis=1)
-    pieces = []
-    for corner_ids in mesh.triangles:
+    pieces, origin = [], []
+    for index, corner_ids in enumerate(mesh.triangles):
         d = signed[corner_ids]
         if (d > 0).all():
             pieces.append(attributes[corner_ids])
+            origin.append(index)
             continue
         polygon = []
         for i in range(3):
@@ -109,14 +118,17 @@ def clip_to_plane(mesh: TriangleMesh, point, normal) -> TriangleMesh:
                 s = d[i] / (d[i] - d[j])                     # where d is 0 along the edge
                 a, b = attributes[corner_ids[i]], attributes[corner_ids[j]]
                 polygon.append(a + s * (b - a))
-        pieces += [np.stack([polygon[0], polygon[k], polygon[k + 1]])
-                   for k in range(1, len(polygon) - 1)]
+        cut = [np.stack([polygon[0], polygon[k], polygon[k + 1]])
+               for k in range(1, len(polygon) - 1)]
+        pieces += cut
+        origin += [index] * len(cut)
     if not pieces:
-        return TriangleMesh(np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 2)),
-                            np.zeros((0, 3), np.int64))
+        return (TriangleMesh(np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 2)),
+                             np.zeros((0, 3), np.int64)), np.zeros(0, np.int64))
     corners = np.concatenate(pieces)
-    return TriangleMesh(corners[:, :3], corners[:, 3:6], corners[:, 6:8],
-                        np.arange(len(corners), dtype=np.int64).reshape(-1, 3))
+    return (TriangleMesh(corners[:, :3], corners[:, 3:6], corners[:, 6:8],
+                         np.arange(len(corners), dtype=np.int64).reshape(-1, 3)),
+            np.asarray(origin, np.int64))
 
 
 def eye_side_normal(point, normal, camera: Camera) -> np.ndarray:
@@ -136,10 +148,18 @@ def mirrored_raster(meshes: list[TriangleMesh], mirror_index: int, camera: Camer
     point, normal = mirror_plane(meshes[mirror_index])
     normal = eye_side_normal(point, normal, camera)
     m = mirror_matrix(point, normal)
-    mirrored = [transformed(clip_to_plane(mesh, point, normal), m) if k != mirror_index
-                else TriangleMesh(mesh.positions, mesh.normals, mesh.uvs, mesh.triangles[:0])
-                for k, mesh in enumerate(meshes)]
-    return rasterise(mirrored, camera, width, height)
+    empty = np.zeros(0, np.int64)
+    clipped = [clipped_with_origin(mesh, point, normal) if k != mirror_index
+               else (TriangleMesh(mesh.positions, mesh.normals, mesh.uvs, mesh.triangles[:0]),
+                     empty)
+               for k, mesh in enumerate(meshes)]
+    raster = rasterise([transformed(mesh, m) for mesh, _ in clipped], camera, width, height)
+    # Name the original triangles, as a picture of the unclipped meshes would.
+    triangle = raster.triangle.copy()
+    for k, (_, origin) in enumerate(clipped):
+        drawn = raster.object_id == k
+        triangle[drawn] = origin[raster.triangle[drawn]]
+    return dataclasses.replace(raster, triangle=triangle)
 
 
 def shade_points(position, normal, view, object_id, materials: list[Material], lights,

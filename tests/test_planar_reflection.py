@@ -164,3 +164,28 @@ def test_floor_mirror_shows_what_the_sphere_tracers_mirror_rays_show():
     compared = raster.hit & frame.hit & ~edges
     assert (compared & in_mirror).sum() > 100                      # the cube, in the mirror
     assert np.abs(color - frame.color).max(axis=-1)[compared].max() <= 1e-6
+
+
+def test_a_mesh_cut_by_the_mirror_plane_is_named_by_its_original_triangles():
+    # A wall mirror standing on a floor that runs on behind it: the floor is cut at the
+    # mirror's plane, and the mirrored picture must still name the floor's own triangles
+    # (the path labels look up each triangle's smooth patch by them).
+    from reference_cpu.planar_reflection import mirrored_raster
+    turn = np.eye(4)
+    turn[:3, :3] = [[1, 0, 0], [0, 0, -1], [0, 1, 0]]           # +y to +z: faces the eye
+    turn[:3, 3] = (0.0, 1.0, -1.0)
+    floor = plane(6.0, 6.0, subdivisions=3)
+    meshes = [floor, transformed(plane(2.0, 2.0), turn)]
+    camera = Camera(position=(0.0, 1.2, 3.0), look_at=(0.0, 0.8, -1.0), fov=50.0)
+    raster = mirrored_raster(meshes, 1, camera, 64, 48)
+    shown = raster.object_id == 0
+    assert shown.sum() > 100
+    assert raster.triangle[shown].max() < len(floor.triangles)
+    # Each named triangle holds the real point behind its mirrored fragment.
+    origin, directions = camera_rays(camera, 64, 48)
+    m = mirror_matrix((0.0, 1.0, -1.0), (0.0, 0.0, 1.0))
+    seen = origin + raster.depth[shown][:, None] * directions[shown]
+    real = seen @ m[:3, :3].T + m[:3, 3]
+    corners = floor.positions[floor.triangles[raster.triangle[shown]]]
+    low, high = corners.min(axis=1) - 1e-9, corners.max(axis=1) + 1e-9
+    assert np.all((real >= low) & (real <= high))
