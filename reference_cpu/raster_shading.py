@@ -56,12 +56,13 @@ def shade_raster(raster: Raster, camera: Camera, materials: list[Material], ligh
     """
     height, width = raster.depth.shape
     origin, directions = camera_rays(camera, width, height)
+    hit = raster.hit
     if isinstance(background, Background):
-        color = shading.background(directions.reshape(-1, 3), background).reshape(
-            height, width, 3).astype(np.float64)
+        # Looked up only where nothing is drawn: a cube map costs bilinear lookups a pixel.
+        color = np.zeros((height, width, 3))
+        color[~hit] = shading.background(directions[~hit], background)
     else:
         color = np.broadcast_to(np.asarray(background, np.float64), (height, width, 3)).copy()
-    hit = raster.hit
     if not hit.any():
         return color
     if model == "normals":

@@ -6,10 +6,12 @@ step, in the spirit of tinyrenderer (Sokolov, https://github.com/ssloy/tinyrende
 1. **Vertex transform.** Each vertex into the camera's frame (right, up, forward), with the
    same camera as the sphere tracer (`scene_model.camera`): the pixel whose centre a point
    projects to is the pixel whose ray goes through it (`scene_model.camera.project`).
-2. **Near-plane clipping.** A triangle behind the eye has no image, and one that crosses the
-   plane z = `NEAR` in front of it would project through infinity: it is cut at that plane
-   into one or two triangles (Sutherland and Hodgman 1974), with its attributes interpolated
-   along the cut edges.
+2. **Clipping.** A triangle behind the eye has no image, and one that crosses the plane
+   z = `NEAR` in front of it would project through infinity: it is cut at that plane
+   (Sutherland and Hodgman 1974), its attributes interpolated along the cut edges. It is
+   also cut at four planes `GUARD_BAND` pixels outside the image's sides, as a GPU's
+   guard-band clipper does, so that no corner lands so far off screen that the integer edge
+   functions of step 3 overflow (`clip_planes`).
 3. **Edge functions** (Pineda 1988). Pixel centre p is inside triangle (a, b, c) when it lies
    on the inner side of all three edges: E_ab(p) = (b - a) x (p - a) > 0, and so on. The
    three values, divided by twice the area, are p's barycentric coordinates in the image.
@@ -31,15 +33,14 @@ step, in the spirit of tinyrenderer (Sokolov, https://github.com/ssloy/tinyrende
 
 `rasterise_one_by_one` does all this one triangle at a time, as the steps read: the version
 to read first. A Python loop pays NumPy's overhead per triangle, though, so `rasterise` by
-default runs `rasterise_batched`: the same integer edge functions, fill rule and weights
-on the pixels of many triangles at once (`draw_triangles`), and the depth test resolved as
-the loop resolves it (`nearest_first`). It gives the same picture to the last bit
-(tests/test_rasterise.py), which is why attributes are interpolated with `interpolate`
-written out, not with a matrix product.
+default runs its batched twin (`reference_cpu.rasterise_batched`), which gives the same
+picture to the last bit (tests/test_rasterise.py); that is why attributes are interpolated
+with `interpolate` written out, not with a matrix product.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -50,6 +51,8 @@ from scene_model.meshes import TriangleMesh
 
 NEAR = 1e-3          # the near clipping plane, metres in front of the eye
 SUBPIXELS = 256      # vertices snap to 1/256 of a pixel (8 bits: Direct3D 11's precision)
+GUARD_BAND = 2**16   # pixels beyond each side of the image where triangles are cut
+NEAR_PLANE = (0.0, 0.0, 1.0, -NEAR)    # z - NEAR >= 0, as `clip_planes` writes planes
 
 
 @dataclass(frozen=True)
@@ -98,6 +101,17 @@ def rasterise(meshes: list[TriangleMesh], camera: Camera, width: int, height: in
     return draw(meshes, camera, width, height, cull_back_faces)
 
 
+def rasterise_batched(meshes: list[TriangleMesh], camera: Camera, width: int, height: int,
+                      cull_back_faces: bool = False) -> Raster:
+    """`reference_cpu.rasterise_batched.rasterise_batched`, imported when called.
+
+    That module is built from this one's steps and imports them: the one import back, here,
+    is the single cycle the import-linter contract allows (pyproject.toml says so).
+    """
+    from . import rasterise_batched as batched
+    return batched.rasterise_batched(meshes, camera, width, height, cull_back_faces)
+
+
 # --- One triangle at a time: the textbook rasteriser ---------------------------------------
 
 def rasterise_one_by_one(meshes: list[TriangleMesh], camera: Camera, width: int, height: int,
@@ -128,7 +142,7 @@ def rasterise_one_by_one(meshes: list[TriangleMesh], camera: Camera, width: int,
     # The length of each pixel's ray direction before normalising: t = z |d| for view depth z.
     stretch = ray_stretch(camera, width, height)
     for k, mesh in enumerate(meshes):
-        for index, corners in clipped_triangles(mesh, camera):
+        for index, corners in clipped_triangles(mesh, camera, (width, height)):
             image, z, normals, uvs = project_corners(corners, camera, width, height)
             drawn = draw_triangle(image, z, cull_back_faces, (width, height))
             if drawn is None:
@@ -157,39 +171,116 @@ def ray_stretch(camera: Camera, width: int, height: int) -> np.ndarray:
     return 1.0 / (directions @ forward)
 
 
-def clipped_triangles(mesh: TriangleMesh, camera: Camera):
-    """Yield (triangle index, corners) for every piece of ``mesh``'s triangles in front of
-    the near plane; corners is a (3, 11) array of camera-frame position, normal, uv and the
-    three barycentric coordinates within the original triangle (the clip's bookkeeping)."""
+def clipped_triangles(mesh: TriangleMesh, camera: Camera,
+                      size: tuple[int, int] | None = None):
+    """Yield (triangle index, corners) for every piece of ``mesh``'s triangles inside the
+    clipping planes (`clip_planes`); corners is a (3, 11) array of camera-frame position,
+    normal, uv and the three barycentric coordinates within the original triangle (the
+    clip's bookkeeping). Without the image's ``size`` (width, height) the near plane alone
+    clips."""
+    planes = clip_planes(camera, size)
     view = to_camera(mesh.positions, camera)
+    distance = plane_distances(planes, view)               # (V, P): >= 0 on the inner side
     for index, corner_ids in enumerate(mesh.triangles):
         corners = np.concatenate([view[corner_ids], mesh.normals[corner_ids],
                                   mesh.uvs[corner_ids], np.eye(3)], axis=1)
-        front = corners[:, 2] >= NEAR
-        if front.all():
+        inner = distance[corner_ids] >= 0                  # (3, P)
+        if inner.all():
             yield index, corners
-        elif front.any():
-            for piece in clip_near(corners):
+        elif inner.any(axis=0).all():                      # not wholly outside any plane
+            for piece in clip_triangle(corners, planes):
                 yield index, piece
+
+
+def clip_planes(camera: Camera, size: tuple[int, int] | None = None) -> np.ndarray:
+    """The clipping planes (P, 4), each (n, w) keeping the camera-frame points v where
+    n . v + w >= 0: the near plane z >= `NEAR`, and, given the image's ``size`` (width,
+    height), four planes through the eye that project to the lines `GUARD_BAND` pixels
+    outside the image's sides.
+
+    With f = H / (2 tan(fov / 2)) pixels per unit of x / z, a point projects to
+    x_img = W / 2 + f x / z and y_img = H / 2 - f y / z (`scene_model.camera.view_to_image`);
+    for z > 0, -G <= x_img <= W + G reads f x + (W / 2 + G) z >= 0 and -f x + (W / 2 + G) z
+    >= 0, and likewise in y. A GPU clips at such a guard band rather than at the image's
+    edges (Blinn, "Calculating Screen Coverage", IEEE CG&A 16(3), 1996; Giesen, "A trip
+    through the Graphics Pipeline 2011, part 5", https://fgiesen.wordpress.com/2011/07/05/
+    a-trip-through-the-graphics-pipeline-2011-part-5/): a triangle that crosses only the
+    image's edges is drawn whole, its pixels outside skipped, and only the rare one reaching
+    far beyond is cut.
+
+    Why G = 2^16 pixels. After the cut every corner lies within [-G, W + G] x [-G, H + G],
+    W and H at most 2^14 (`scene_model.camera.MAX_SIDE`), so a snapped coordinate is at
+    most B = 256 (2^16 + 2^14) + 1 < 2^24.33 subpixels from the origin, up to the rounding
+    of the cut (a few ulps: far below a subpixel). An edge function (b - a) x (p - a), p a
+    pixel centre inside the image, is a difference of two products of factors under
+    2B < 2^25.33, so below 2^51.7 in size: far inside int64 (to 2^63). Before, a corner cut
+    at the near plane could land 2^40 subpixels off screen, and the products wrapped round.
+    The band also bounds the rounding of the weights, found in floating point from the
+    corners' image positions: it grows with their distance (on a 10 km floor, measured: 1e-11
+    relative in depth at G = 2^12, 1e-10 at 2^16, 3e-9 at 2^20).
+
+    Why the picture does not change. The planes lie 65536 pixels outside the image: a
+    cut replaces a triangle by its part inside them, the same set of points wherever the
+    image is, with new corners that lie on the triangle's edges, out there. Attributes vary
+    linearly along an edge in space, and the cut interpolates them with the same fraction
+    as the position, so a cut corner carries the very values the edge had there. Inside
+    the image the only change is the snap of the new corners to 1/256 of a pixel, like any
+    corner's: a pixel centre within that of a cut edge's line may fall to either side.
+    """
+    planes = [NEAR_PLANE]
+    if size is not None:
+        width, height = size
+        f = height / (2 * math.tan(math.radians(camera.fov) / 2))
+        half_w, half_h = width / 2 + GUARD_BAND, height / 2 + GUARD_BAND
+        planes += [(f, 0.0, half_w, 0.0), (-f, 0.0, half_w, 0.0),      # left, right
+                   (0.0, -f, half_h, 0.0), (0.0, f, half_h, 0.0)]      # top, bottom
+    return np.array(planes)
+
+
+def plane_distances(planes: np.ndarray, view: np.ndarray) -> np.ndarray:
+    """n . v + w (N, P) of N camera-frame points (N, 3) for P planes (P, 4): positive on the
+    side kept. Written out, not as a matrix product, so that a point gets the same bits
+    alone or among many (see `interpolate`)."""
+    n = planes.T[:, None, :]                               # (4, 1, P)
+    return (n[0] * view[:, 0, None] + n[1] * view[:, 1, None] + n[2] * view[:, 2, None]
+            + n[3])
+
+
+def clip_triangle(corners: np.ndarray, planes: np.ndarray) -> list[np.ndarray]:
+    """The part of a triangle (3, A) (columns 0 to 2: camera-frame position) inside every
+    plane of ``planes`` (P, 4), as triangles (3, A): cut at each plane in turn
+    (`clip_polygon`), then fanned from the first corner."""
+    polygon = corners
+    for plane in planes:
+        polygon = clip_polygon(polygon, plane_distances(plane[None], polygon[:, :3])[:, 0])
+    return [np.stack([polygon[0], polygon[i], polygon[i + 1]])
+            for i in range(1, len(polygon) - 1)]
+
+
+def clip_polygon(polygon: np.ndarray, distance: np.ndarray) -> np.ndarray:
+    """The part (K', A) of a convex polygon (K, A) where ``distance`` (K,), its corners'
+    signed distances to a plane, is >= 0: Sutherland and Hodgman (1974) against one plane.
+    Walk round the corners, keep those inside, and where an edge crosses the plane add the
+    point a fraction s = d_a / (d_a - d_b) of the way along it, every attribute
+    interpolated."""
+    kept = []
+    for i in range(len(polygon)):
+        j = (i + 1) % len(polygon)
+        a_in, b_in = distance[i] >= 0, distance[j] >= 0
+        if a_in:
+            kept.append(polygon[i])
+        if a_in != b_in:
+            s = distance[i] / (distance[i] - distance[j])
+            kept.append(polygon[i] + s * (polygon[j] - polygon[i]))
+    return np.array(kept).reshape(-1, polygon.shape[1])
 
 
 def clip_near(corners: np.ndarray) -> list[np.ndarray]:
     """The part of a triangle (3, A) (column 2: view depth z) with z >= `NEAR`, as one or
-    two triangles: Sutherland-Hodgman against one plane, every attribute interpolated along
-    the cut edges."""
-    polygon = []
-    for i in range(3):
-        a, b = corners[i], corners[(i + 1) % 3]
-        a_in, b_in = a[2] >= NEAR, b[2] >= NEAR
-        if a_in:
-            polygon.append(a)
-        if a_in != b_in:
-            s = (NEAR - a[2]) / (b[2] - a[2])
-            cut = a + s * (b - a)
-            cut[2] = NEAR
-            polygon.append(cut)
-    return [np.stack([polygon[0], polygon[i], polygon[i + 1]])
-            for i in range(1, len(polygon) - 1)]
+    two triangles: Sutherland-Hodgman against one plane (`clip_polygon`), every attribute
+    interpolated along the cut edges. `clip_triangle` does the same at every clipping
+    plane."""
+    return clip_triangle(corners, np.array([NEAR_PLANE]))
 
 
 def project_corners(corners: np.ndarray, camera: Camera, width: int, height: int):
@@ -208,7 +299,7 @@ def edge(ax, ay, bx, by, px, py):
 def is_top_left(ax, ay, bx, by):
     """Whether edge a -> b of a clockwise triangle (y down) is a top edge (horizontal, going
     right: the triangle lies below it) or a left edge (going up). Written with & and | so
-    that it takes arrays of edges too (`draw_triangles`)."""
+    that it takes arrays of edges too (`reference_cpu.rasterise_batched.draw_triangles`)."""
     return ((ay == by) & (bx > ax)) | (by < ay)
 
 
@@ -297,236 +388,3 @@ def interpolate(weights: np.ndarray, values: np.ndarray) -> np.ndarray:
             + weights[:, 2, None] * values[..., 2, :])
 
 
-# --- Many triangles at once: the same arithmetic, without a Python loop per triangle -------
-
-CHUNK = 1 << 20      # candidate pixels tested per step of `draw_triangles` (bounds memory)
-
-
-def rasterise_batched(meshes: list[TriangleMesh], camera: Camera, width: int, height: int,
-                      cull_back_faces: bool = False) -> Raster:
-    """`rasterise_one_by_one`'s picture, to the last bit, from many triangles at a time.
-
-    The loop lets a later triangle take a pixel only when it is strictly nearer, so what a
-    pixel keeps is, of all the fragments drawn on it, the first (in drawing order: mesh by
-    mesh, triangle by triangle) of the nearest: `nearest_first` finds it among a batch's
-    fragments, and it replaces what the buffer holds from earlier batches only when
-    strictly nearer.
-    """
-    pixels = width * height
-    depth = np.full(pixels, np.inf)
-    normal = np.zeros((pixels, 3))
-    uv = np.zeros((pixels, 2))
-    object_id = np.full(pixels, -1, np.int64)
-    triangle_id = np.full(pixels, -1, np.int64)
-    coverage = np.zeros(pixels, np.int64)
-    stretch = ray_stretch(camera, width, height).ravel()
-    # Every mesh's triangles in one list, in drawing order, each with its mesh's number.
-    batches = [clipped_triangle_batch(mesh, camera) for mesh in meshes]
-    index = np.concatenate([i for i, _ in batches] or [np.zeros(0, np.int64)])
-    corners = np.concatenate([c for _, c in batches] or [np.zeros((0, 3, 11))])
-    mesh_of = np.repeat(np.arange(len(meshes)), [len(i) for i, _ in batches])
-    image, z, normals, uvs = project_corner_batch(corners, camera, width, height)
-    for tri, rows, cols, weights in draw_triangles(image, z, cull_back_faces, (width, height)):
-        pixel = rows * width + cols
-        coverage += np.bincount(pixel, minlength=pixels)
-        t = interpolate(weights, z[tri, :, None])[:, 0] * stretch[pixel]
-        won = nearest_first(pixel, t)
-        won = won[t[won] < depth[pixel[won]]]
-        p, w, tw = pixel[won], weights[won], tri[won]
-        depth[p] = t[won]
-        normal[p] = normalize(interpolate(w, normals[tw]))
-        uv[p] = interpolate(w, uvs[tw])
-        object_id[p] = mesh_of[tw]
-        triangle_id[p] = index[tw]
-    return Raster(depth.reshape(height, width), normal.reshape(height, width, 3),
-                  uv.reshape(height, width, 2), object_id.reshape(height, width),
-                  triangle_id.reshape(height, width), coverage.reshape(height, width))
-
-
-def nearest_first(key: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """Indices of the fragments a sequential depth test keeps: for each distinct ``key``
-    (P,) (a pixel), the first of those with the least ``t`` (P,) (NaN never wins; fmin
-    skips it), fragments being given in drawing order."""
-    nearest = np.full(int(key.max(initial=-1)) + 1, np.inf)
-    np.fmin.at(nearest, key, t)
-    candidates = np.flatnonzero(t == nearest[key])
-    first = np.full(len(nearest), len(t))
-    np.minimum.at(first, key[candidates], candidates)
-    return first[first < len(t)]
-
-
-def clipped_triangle_batch(mesh: TriangleMesh, camera: Camera):
-    """`clipped_triangles`'s pieces, in its order, as arrays: triangle index (N,) and
-    corners (N, 3, 11). Triangles wholly in front of the near plane go through as they are;
-    only the few that cross it go through `clip_near`, one at a time."""
-    view = to_camera(mesh.positions, camera)
-    ids = mesh.triangles
-    bookkeeping = np.broadcast_to(np.eye(3), (len(ids), 3, 3))
-    corners = np.concatenate([view[ids], mesh.normals[ids], mesh.uvs[ids], bookkeeping],
-                             axis=2)
-    front = corners[:, :, 2] >= NEAR
-    whole = front.all(axis=1)
-    index, pieces = [np.flatnonzero(whole)], [corners[whole]]
-    for i in np.flatnonzero(front.any(axis=1) & ~whole):
-        cut = clip_near(corners[i])
-        index.append(np.full(len(cut), i))
-        pieces.append(np.stack(cut))
-    index, pieces = np.concatenate(index), np.concatenate(pieces)
-    order = np.argsort(index, kind="stable")       # each piece in its triangle's place
-    return index[order], pieces[order]
-
-
-def project_corner_batch(corners: np.ndarray, camera: Camera, width: int, height: int):
-    """`project_corners` of N triangles (N, 3, A): image (N, 3, 2), z (N, 3), normals
-    (N, 3, 3) and uvs (N, 3, 2)."""
-    image = view_to_image(corners[:, :, :3].reshape(-1, 3), camera, width, height)
-    return (image.reshape(-1, 3, 2), corners[:, :, 2], corners[:, :, 3:6],
-            corners[:, :, 6:8])
-
-
-def winding(image: np.ndarray) -> np.ndarray:
-    """(N,) int: the sign of each triangle's area (N, 3, 2) on the snapped grid, as
-    `draw_triangle` finds it: +1 clockwise on the screen (y down), a back face; -1
-    anticlockwise; 0 edge-on. In int64, exact while the corners lie within 2^30 subpixels
-    of the origin; the rare triangle beyond (a corner near the near plane) in Python's
-    unbounded integers."""
-    fixed = np.round(image * SUBPIXELS).astype(np.int64)
-    (ax, ay), (bx, by), (cx, cy) = fixed.transpose(1, 2, 0)
-    area = np.sign(edge(ax, ay, bx, by, cx, cy))
-    far = np.flatnonzero(np.abs(fixed).max(axis=(1, 2), initial=0) >= 2**30)
-    for i in far:
-        area[i] = np.sign(edge(*fixed[i].ravel().tolist()))
-    return area
-
-
-def draw_triangles(image: np.ndarray, z: np.ndarray, cull_back_faces: bool = False,
-                   size: tuple[int, int] = (0, 0), chunk: int | None = None):
-    """The pixels whose centres N triangles cover: `draw_triangle`'s arithmetic, on many
-    triangles' pixels at once, about ``chunk`` pixels at a time.
-
-    `draw_triangle` tests every pixel of a triangle's bounding box; a long thin triangle
-    across the picture (a shadow volume's side) covers a sliver of it. Here the candidates
-    are, on each row of the box, the pixels near the row's crossing of the triangle
-    (`row_spans`), and the same integer edge functions and fill rule decide among them.
-
-    Parameters
-    ----------
-    image : (N, 3, 2) float64
-        Corners in pixels (x right, y down).
-    z : (N, 3) float64
-        Their view depths (> 0).
-    cull_back_faces : bool
-    size : (width, height)
-        The image's size: pixels outside it are not drawn.
-    chunk : int, optional
-        How many candidate pixels to test at once (the memory it takes); `CHUNK` if None.
-
-    Yields
-    ------
-    triangle, row, col : (P,) int64 ndarrays
-        The covered pixels, triangle by triangle in order, each's row by row (as
-        ``np.nonzero(inside)`` gives them).
-    weights : (P, 3) float64 ndarray
-        Their perspective-correct barycentric weights, the bits `draw_triangle` gives.
-    """
-    width, height = size
-    chunk = CHUNK if chunk is None else chunk
-    sign = winding(image)
-    # The fill rule is written for clockwise corners: turn the others, b and c swapped.
-    order = np.where(sign[:, None] < 0, [0, 2, 1], [0, 1, 2])
-    clockwise = np.take_along_axis(image, order[:, :, None], axis=1)
-    fixed = np.round(clockwise * SUBPIXELS).astype(np.int64)
-    low = np.floor(image.min(axis=1) - 0.5).astype(int)
-    high = np.ceil(image.max(axis=1) - 0.5).astype(int)
-    x0, y0 = np.maximum(low[:, 0], 0), np.maximum(low[:, 1], 0)
-    x1, y1 = np.minimum(high[:, 0], width - 1), np.minimum(high[:, 1], height - 1)
-    drawn = (sign != 0) & ~((sign > 0) & cull_back_faces) & (x1 >= x0) & (y1 >= y0)
-    a, b, c = fixed.transpose(1, 2, 0)                     # each (2, N): x and y
-    edges = [(b, c), (c, a), (a, b)]                       # opposite a, b and c
-    owns = [np.broadcast_to(is_top_left(*p, *q), sign.shape) for p, q in edges]
-    # Weights from the exact image positions (the snap decides coverage only).
-    (ex, ey), (gx, gy), (hx, hy) = clockwise.transpose(1, 2, 0)
-    total = edge(ex, ey, gx, gy, hx, hy)
-    rows = np.where(drawn, y1 - y0 + 1, 0)
-    for group in chunks_of(rows, max(chunk // 16, 1)):
-        # Every row of each box, then the span of its columns worth testing.
-        tri = np.repeat(group, rows[group])
-        row = y0[tri] + ranks(rows[group])
-        first, last = row_spans(fixed[tri], row, x0[tri], x1[tri])
-        span = np.maximum(last - first + 1, 0)
-        for part in chunks_of(span, chunk):
-            t, n = tri[part], span[part]
-            step = ranks(n)                                # columns right of the first
-            px = first[part] * SUBPIXELS + SUBPIXELS // 2
-            py = row[part] * SUBPIXELS + SUBPIXELS // 2
-            # Each edge function at the row's first centre, then stepped along the row: it
-            # is linear, E(x + 1, y) = E(x, y) - (q_y - p_y) SUBPIXELS (Pineda 1988), and in
-            # integers the steps give exactly the values draw_triangle finds afresh.
-            inside = np.ones(len(step), bool)
-            for (p, q), own in zip(edges, owns):
-                value = (np.repeat(edge(p[0, t], p[1, t], q[0, t], q[1, t], px, py), n)
-                         - np.repeat((q[1, t] - p[1, t]) * SUBPIXELS, n) * step)
-                # > 0, or = 0 on an edge the triangle owns (the top-left rule)
-                inside &= value >= np.repeat(np.where(own[t], 0, 1), n)
-            at = np.repeat(np.arange(len(t)), n)[inside]   # the row of each covered pixel
-            t, r, col = t[at], row[part][at], first[part][at] + step[inside]
-            fx, fy = col + 0.5, r + 0.5
-            w_a = edge(gx[t], gy[t], hx[t], hy[t], fx, fy) / total[t]
-            w_b = edge(hx[t], hy[t], ex[t], ey[t], fx, fy) / total[t]
-            w_c = edge(ex[t], ey[t], gx[t], gy[t], fx, fy) / total[t]
-            # Back in the triangle's own corner order, then made perspective-correct.
-            turned = sign[t] < 0
-            screen = np.stack([w_a, np.where(turned, w_c, w_b), np.where(turned, w_b, w_c)],
-                              axis=-1)
-            perspective = screen / z[t]
-            weights = perspective / perspective.sum(axis=-1, keepdims=True)
-            yield t, r, col, weights
-
-
-def row_spans(fixed: np.ndarray, row: np.ndarray, x0: np.ndarray, x1: np.ndarray):
-    """The columns ``first`` to ``last`` (R,) of the pixels on ``row`` (R,) whose centres may
-    lie in the triangle with snapped corners ``fixed`` (R, 3, 2), within its box's columns
-    ``x0`` to ``x1`` (R,); first > last where none can.
-
-    The row's centre line y crosses the triangle between the leftmost and the rightmost of
-    its crossings with the three edges. They are found in floating point, to well under a
-    subpixel for corners within 2^30 subpixels, and rounded outwards to whole pixels, since
-    only the integer edge functions may decide. A triangle with a corner beyond keeps its
-    whole box: `draw_triangle`'s int64 edge functions may overflow there, and the loop's
-    pixels are what they say.
-    """
-    y = (row * SUBPIXELS + SUBPIXELS // 2).astype(np.float64)
-    corners = fixed.astype(np.float64)
-    left, right = np.full(len(row), np.inf), np.full(len(row), -np.inf)
-    for i in range(3):
-        (ax, ay), (bx, by) = corners[:, i].T, corners[:, (i + 1) % 3].T
-        crosses = (np.minimum(ay, by) <= y) & (y <= np.maximum(ay, by)) & (ay != by)
-        x = ax + (y - ay) * (bx - ax) / np.where(crosses, by - ay, 1.0)
-        left = np.where(crosses, np.minimum(left, x), left)
-        right = np.where(crosses, np.maximum(right, x), right)
-    met = right >= left
-    # Column i's centre lies at (i + 1/2) SUBPIXELS: from left / SUBPIXELS - 1/2 on.
-    first = np.floor(np.where(met, left, 0.0) / SUBPIXELS - 0.5).astype(np.int64)
-    last = np.ceil(np.where(met, right, 0.0) / SUBPIXELS - 0.5).astype(np.int64)
-    far = np.abs(fixed).max(axis=(1, 2), initial=0) >= 2**30
-    first = np.where(far, x0, np.where(met, np.maximum(first, x0), 1))
-    last = np.where(far, x1, np.where(met, np.minimum(last, x1), 0))
-    return first, last
-
-
-def ranks(count: np.ndarray) -> np.ndarray:
-    """0, 1, ..., count[0] - 1, 0, 1, ..., count[1] - 1, ...: each item's place in its run."""
-    return np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count)
-
-
-def chunks_of(count: np.ndarray, chunk: int):
-    """Yield the indices of consecutive items with a nonzero ``count`` (N,) in groups whose
-    counts add up to at most ``chunk`` (or one item, if its count is more)."""
-    counted = np.flatnonzero(count)
-    end = np.cumsum(count[counted])
-    start = 0
-    while start < len(counted):
-        before = end[start - 1] if start else 0
-        stop = max(int(np.searchsorted(end, before + chunk, side="right")), start + 1)
-        yield counted[start:stop]
-        start = stop

@@ -39,9 +39,10 @@ from scene_model.camera import Camera
 from scene_model.meshes import TriangleMesh
 from scene_model.scene import DirectionalLight
 
-from .rasterise import (SUBPIXELS, Raster, clipped_triangle_batch, clipped_triangles,
-                        draw_triangle, draw_triangles, edge, interpolate, project_corner_batch,
-                        project_corners, ray_stretch, winding)
+from .rasterise import (SUBPIXELS, Raster, clipped_triangles, draw_triangle, edge, interpolate,
+                        project_corners, ray_stretch)
+from .rasterise_batched import (clipped_triangle_batch, draw_triangles, project_corner_batch,
+                                winding)
 
 MATCH = 1e-9         # vertices closer than this fraction of a mesh's size are one point
 
@@ -185,9 +186,10 @@ def stencil_counts_one_by_one(meshes: list[TriangleMesh], raster: Raster, camera
         lit = facing_light(mesh, light)
         # The front cap goes through the very steps that drew the mesh, so where it is the
         # surface drawn its depth is that depth to the last bit.
-        pieces = [c for index, c in clipped_triangles(mesh, camera) if lit[index]]
+        pieces = [c for index, c in clipped_triangles(mesh, camera, (width, height))
+                  if lit[index]]
         pieces += [c for _, c in clipped_triangles(
-            volume_sides_and_back_cap(mesh, light, reach), camera)]
+            volume_sides_and_back_cap(mesh, light, reach), camera, (width, height))]
         for corners in pieces:
             image, z, _, _ = project_corners(corners, camera, width, height)
             drawn = draw_triangle(image, z, False, (width, height))
@@ -209,7 +211,7 @@ def stencil_counts_batched(meshes: list[TriangleMesh], raster: Raster, camera: C
                            light, method: str = "depth-fail",
                            reach: float | None = None) -> np.ndarray:
     """`stencil_counts_one_by_one`'s counts from all of a mesh's volume triangles at once
-    (`reference_cpu.rasterise.draw_triangles`): each fragment's depth is the same number,
+    (`reference_cpu.rasterise_batched.draw_triangles`): each fragment's depth is the same number,
     and a sum does not depend on the order its terms come in."""
     height, width = raster.depth.shape
     reach = volume_reach(meshes, light) if reach is None else reach
@@ -219,9 +221,9 @@ def stencil_counts_batched(meshes: list[TriangleMesh], raster: Raster, camera: C
     for mesh in meshes:
         if neighbours(mesh) is None:
             continue                                         # open: casts no volume
-        index, cap = clipped_triangle_batch(mesh, camera)
+        index, cap = clipped_triangle_batch(mesh, camera, (width, height))
         _, volume = clipped_triangle_batch(volume_sides_and_back_cap(mesh, light, reach),
-                                           camera)
+                                           camera, (width, height))
         corners += [cap[facing_light(mesh, light)[index]], volume]
     corners = np.concatenate(corners or [np.zeros((0, 3, 11))])
     image, z, _, _ = project_corner_batch(corners, camera, width, height)

@@ -40,8 +40,9 @@ from scene_model.geometry import normalize
 from scene_model.meshes import TriangleMesh
 from scene_model.scene import Material
 
-from .rasterise import (Raster, clipped_triangle_batch, draw_triangles, interpolate,
-                        nearest_first, project_corner_batch, rasterise, ray_stretch)
+from .rasterise import Raster, interpolate, rasterise, ray_stretch
+from .rasterise_batched import (clipped_triangle_batch, draw_triangles, nearest_first,
+                                project_corner_batch)
 from .raster_shading import shade_raster
 
 
@@ -142,7 +143,7 @@ def transparent_fragments_one_by_one(meshes, materials, lights, camera: Camera, 
 def transparent_fragments_batched(meshes, materials, lights, camera: Camera, width: int,
                                   height: int, **shade) -> Fragments:
     """`transparent_fragments_one_by_one`'s fragments from all the transparent triangles
-    drawn at once (`reference_cpu.rasterise.draw_triangles`), then shaded a layer at a time:
+    drawn at once (`reference_cpu.rasterise_batched.draw_triangles`), then shaded a layer at a time:
     layer n holds each pixel's n-th fragment, so that a layer is a `Raster` with at most
     one surface a pixel, and one `shade_raster` call shades all its fragments."""
     triangles, place = far_to_near(meshes, materials, camera)
@@ -152,7 +153,7 @@ def transparent_fragments_batched(meshes, materials, lights, camera: Camera, wid
     stretch = ray_stretch(camera, width, height).ravel()
     parts = []
     for k in first:
-        index, corners = clipped_triangle_batch(meshes[k], camera)
+        index, corners = clipped_triangle_batch(meshes[k], camera, (width, height))
         image, z, normals, uvs = project_corner_batch(corners, camera, width, height)
         for tri, rows, cols, weights in draw_triangles(image, z, False, (width, height)):
             pixel = rows * width + cols

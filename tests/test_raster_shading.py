@@ -19,11 +19,13 @@ from marchlab import render
 from marchlab.compare import boundary, dilate
 from mesh_scenes import CAMERA, turned
 from reference_cpu.rasterise import rasterise
+from reference_cpu import shading
 from reference_cpu.raster_shading import shade_raster
 from scene_model.builder import box, union
+from scene_model.camera import camera_rays
 from scene_model.meshes import MeshNode, cube, world_meshes
 from scene_model.scene import (DirectionalLight, Material, PointLight, RenderSettings, Scene,
-                               SolidBackground, SpotLight)
+                               SolidBackground, SpotLight, StudioBackground)
 
 WIDTH, HEIGHT = 96, 72
 MATERIAL = Material(color=(0.8, 0.3, 0.2), ks=0.5, shininess=24.0)
@@ -88,3 +90,29 @@ def test_mesh_hierarchy_draws_the_sdf_tree_of_the_same_transforms():
     assert (raster.object_id[inside] == 1).sum() > 20
     assert (raster.object_id[inside] == 0).sum() > 20
     assert np.abs(color - frame.color).max(axis=-1)[inside].max() <= 1e-6
+
+
+def test_background_is_looked_up_only_where_nothing_is_drawn_with_the_same_bits(monkeypatch):
+    """A cube-map background (the studio) behind a cube: `shading.background` is asked for
+    the pixels nothing is drawn on and no others, and the picture is, bit for bit, the one
+    made by looking it up on every pixel and shading over the drawn ones."""
+    background = StudioBackground()
+    raster = rasterise([turned(cube(1.0), TURN, OFFSET)], CAMERA, WIDTH, HEIGHT)
+    assert 200 < raster.hit.sum() < WIDTH * HEIGHT - 200
+    asked = []
+    original = shading.background
+
+    def counting(direction, bg):
+        asked.append(len(direction))
+        return original(direction, bg)
+
+    monkeypatch.setattr(shading, "background", counting)
+    color = shade_raster(raster, CAMERA, [MATERIAL], LIGHTS, background=background)
+    assert asked == [(~raster.hit).sum()]
+    monkeypatch.undo()
+    _, directions = camera_rays(CAMERA, WIDTH, HEIGHT)
+    everywhere = original(directions.reshape(-1, 3), background).reshape(HEIGHT, WIDTH, 3)
+    drawn = shade_raster(raster, CAMERA, [MATERIAL], LIGHTS)
+    expected = np.where(raster.hit[..., None], drawn, everywhere).astype(np.float64)
+    assert color.dtype == expected.dtype and color.tobytes() == expected.tobytes()
+    assert np.ptp(color[~raster.hit], axis=0).max() > 0.05        # the map varies

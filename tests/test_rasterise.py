@@ -1,10 +1,11 @@
 """The NumPy rasteriser (`reference_cpu.rasterise`): the top-left fill rule draws each pixel
 of a shared edge once, perspective-correct interpolation gives the texture coordinates of
 the exact ray-plane intersection (and screen-linear interpolation does not), clipping at the
-near plane keeps a floor that runs behind the eye, and the picture of a mesh is the picture
-Embree's ray casts of the same triangles give (tests/truth: `test_rasterise_against_embree`).
-The batched rasteriser (`rasterise_batched`, `draw_triangles`) gives the textbook loop's
-picture to the last bit: same depth, normals, uvs, ids and coverage.
+near plane keeps a floor that runs behind the eye, the guard band keeps a 10 km floor exact,
+and the picture of a mesh is the picture Embree's ray casts of the same triangles give
+(tests/truth: `test_rasterise_against_embree`). The batched rasteriser
+(`reference_cpu.rasterise_batched`) gives the textbook loop's picture to the last bit: same
+depth, normals, uvs, ids and coverage.
 """
 
 from __future__ import annotations
@@ -14,8 +15,10 @@ import pytest
 
 import marchlab
 import reference_cpu.rasterise as R
+import reference_cpu.rasterise_batched as RB
 import mesh_scenes
-from reference_cpu.rasterise import NEAR, draw_triangle, draw_triangles, is_top_left, rasterise
+from reference_cpu.rasterise import NEAR, draw_triangle, is_top_left, rasterise
+from reference_cpu.rasterise_batched import draw_triangles
 from scene_model.camera import Camera, camera_rays
 from scene_model.geometry import dot
 from scene_model.mesh_world import scene_meshes
@@ -124,6 +127,57 @@ def test_near_plane_clips_a_floor_that_runs_behind_the_eye():
     assert NEAR > 0
 
 
+@pytest.mark.parametrize("camera, subdivisions", [
+    (Camera(position=(0.0, 2.0, 0.0), look_at=(3.0, -1.0, -3.0), up=(0.8, 1.0, -1.6),
+            fov=40.0), 1),
+    (Camera(position=(0.3, 1.6, 0.2), look_at=(2.0, 0.0, -6.0), up=(0.3, 1.0, 0.0),
+            fov=60.0), 4)], ids=["looking down, rolled", "towards the horizon, rolled"])
+def test_ten_km_floor_through_the_near_plane_is_the_exact_ray_plane_answer(camera,
+                                                                        subdivisions):
+    """A 10 km floor under the eye, rolled in the picture: its triangles cross the near plane,
+    where cut corners project up to 2^40 subpixels off screen, in x and y at once. Cut again
+    at the guard band (`clip_planes`), every pixel whose ray meets the floor is drawn, at the
+    ray-plane distance within 1e-9 relative, and none that looks up. (Without the guard band
+    the int64 edge functions overflowed: the first camera lost 3456 of its 6912 pixels, the
+    second's depths were off by 4e-8.) Pixels whose rays meet the plane beyond 4 km, within a
+    hundredth of a pixel of the floor's far edge, are left out: closer than a snap resolves."""
+    size, width, height = 10_000.0, 96, 72
+    floor = plane(size, size, subdivisions=subdivisions)
+    index, corners = RB.clipped_triangle_batch(floor, camera)     # near plane alone
+    image, _, _, _ = RB.project_corner_batch(corners, camera, width, height)
+    assert np.abs(image).min(axis=2).max() * R.SUBPIXELS > 2**31   # far off in x and y
+    raster = rasterise([floor], camera, width, height)
+    origin, directions = camera_rays(camera, width, height)
+    down = directions[..., 1] < 0
+    t = -origin[1] / directions[..., 1]
+    point = origin + t[..., None] * directions
+    near = down & (np.abs(point[..., 0]) < 0.4 * size) & (np.abs(point[..., 2]) < 0.4 * size)
+    assert near.sum() > 0.9 * down.sum()
+    assert raster.hit[near].all() and not raster.hit[~down].any()
+    np.testing.assert_allclose(raster.depth[near], t[near], rtol=1e-9)
+    for cull in (False, True):
+        assert_same_bits(rasterise([floor], camera, width, height, cull),
+                         rasterise([floor], camera, width, height, cull, textbook=True))
+
+
+def test_clipped_corners_stay_inside_the_guard_band():
+    """Every corner `clipped_triangle_batch` gives, projected, lies within `GUARD_BAND` pixels
+    of the image (up to rounding), so snapped it stays below 2^25 subpixels: the bound the
+    int64 edge functions need (`clip_planes`)."""
+    camera = Camera(position=(0.0, 2.0, 0.0), look_at=(3.0, -1.0, -3.0), up=(0.8, 1.0, -1.6),
+                    fov=40.0)
+    width, height = 96, 72
+    meshes = [plane(10_000.0, 10_000.0, subdivisions=3), cube(1.0), uv_sphere(1e4, 24, 12)]
+    for mesh in meshes:
+        index, corners = RB.clipped_triangle_batch(mesh, camera, (width, height))
+        image, z, _, _ = RB.project_corner_batch(corners, camera, width, height)
+        assert z.min() >= NEAR * (1 - 1e-12)
+        band = R.GUARD_BAND * (1 + 1e-9)
+        assert np.all(image >= -band) and np.all(image <= np.array([width, height]) + band)
+        assert np.abs(np.round(image * R.SUBPIXELS)).max() < 2**25
+    assert len(np.unique(index)) < len(index)                  # the sphere around the eye: cut
+
+
 def test_nearer_triangle_wins_the_depth_test_whatever_the_order():
     near_box = transformed(cube(1.0), np.array([[1, 0, 0, 0], [0, 1, 0, 0.3], [0, 0, 1, 1.0],
                                                 [0, 0, 0, 1.0]]))
@@ -190,9 +244,9 @@ def test_batched_rasteriser_clips_at_the_near_plane_as_the_loop_does(camera):
     the near plane, are cut into one or two pieces each, and the cut corners land thousands
     of pictures away."""
     meshes = [plane(200.0, 200.0, subdivisions=3), cube(1.0)]
-    index, corners = R.clipped_triangle_batch(meshes[0], camera)
+    index, corners = RB.clipped_triangle_batch(meshes[0], camera)
     assert len(index) > len(np.unique(index))                 # some cut in two
-    image, _, _, _ = R.project_corner_batch(corners, camera, 48, 36)
+    image, _, _, _ = RB.project_corner_batch(corners, camera, 48, 36)
     assert np.abs(image).max() > 1e5
     for cull in (False, True):
         assert_same_bits(rasterise(meshes, camera, 48, 36, cull),
@@ -205,7 +259,7 @@ def test_equal_depths_go_to_the_first_triangle_drawn_across_batches(monkeypatch)
     batches so small that the copies fall in different ones."""
     floor = plane(4.0, 4.0, subdivisions=2)
     meshes = [floor, merged(floor, floor)]
-    monkeypatch.setattr(R, "CHUNK", 37)
+    monkeypatch.setattr(RB, "CHUNK", 37)
     fast = rasterise(meshes, CAMERA, 40, 30)
     assert fast.hit.sum() > 300 and np.all(fast.object_id[fast.hit] == 0)
     assert np.all(fast.coverage[fast.hit] == 3)

@@ -12,7 +12,8 @@ import pytest
 
 import marchlab
 from mesh_scenes import CAMERA, turned
-from reference_cpu.rasterise import clipped_triangle_batch, rasterise
+from reference_cpu.rasterise import rasterise
+from reference_cpu.rasterise_batched import clipped_triangle_batch
 from reference_cpu.raster_shading import shade_raster
 from reference_cpu.transparency import (depth_complexity, depth_peel, opaque_pass,
                                         sorted_blend, transparent_fragments)
