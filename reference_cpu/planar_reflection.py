@@ -23,7 +23,8 @@ Shadows and Reflections via the Stencil Buffer", NVIDIA 1999) and of Real-Time R
 4. **Shading.** Lights are not mirrored: the mirror shows the real objects under the real
    lights. Each mirrored fragment p' is shaded at its real point p = M p', with its real
    normal H n' and seen along the reflected direction H d (H the linear part of M), which is
-   what a reflected ray would find there (`shade_points`, the sphere tracer's functions).
+   what a reflected ray would find there (`raster_shading.shade_points`, the sphere tracer's
+   functions: colour, checkerboard or texture).
 5. **Combining**, as the sphere tracer does (`reference_cpu.render`, ``lit_color``): the
    mirror's own shaded colour plus kr times what the reflection shows (the background along
    H d where it shows nothing).
@@ -44,9 +45,8 @@ from scene_model.meshes import TriangleMesh, transformed
 from scene_model.scene import LIT_SHADING, Background, Material
 
 from . import shading
-from .lights import unshadowed
 from .rasterise import Raster, rasterise
-from .raster_shading import shade_raster
+from .raster_shading import shade_points, shade_raster
 
 PLANAR_TOLERANCE = 1e-9      # largest distance of a mirror's vertex from its plane, per metre
 
@@ -162,48 +162,6 @@ def mirrored_raster(meshes: list[TriangleMesh], mirror_index: int, camera: Camer
     return dataclasses.replace(raster, triangle=triangle)
 
 
-def shade_points(position, normal, view, object_id, materials: list[Material], lights,
-                 ambient=(0.0, 0.0, 0.0), model: str = "phong",
-                 toon_bands: int = 4) -> np.ndarray:
-    """The linear colour (N, 3) of N surface points, as `raster_shading.shade_raster` shades
-    a pixel, but at any points seen from any direction (a reflected ray's hits).
-
-    Parameters
-    ----------
-    position, normal : (N, 3) float64 ndarrays
-        Points (m) and unit normals.
-    view : (N, 3) float64 ndarray
-        Unit vectors from each point back along the ray that found it.
-    object_id : (N,) int ndarray
-        Which material each point has.
-    materials, lights, ambient, model, toon_bands
-        As `raster_shading.shade_raster` (no shadows: every light reaches every point).
-    """
-    if model == "normals":
-        return shading.shade_normals(normal)
-    if model not in LIT_SHADING:
-        raise ValueError(f"unknown shading model {model!r} (one of: "
-                         f"{', '.join(LIT_SHADING)}, normals)")
-    table = {name: np.array([getattr(m, name) for m in materials], np.float64)
-             for name in ("color", "ka", "kd", "ks", "shininess")}
-    ids = np.asarray(object_id)
-    surface = shading.Surface(position=position, normal=normal, view=view,
-                              albedo=table["color"][ids], ka=table["ka"][ids],
-                              kd=table["kd"][ids], ks=table["ks"][ids],
-                              shininess=table["shininess"][ids], object_id=ids)
-    incoming = [(to_light, radiance, specular, light_ambient)
-                for to_light, _, radiance, specular, light_ambient, _ in
-                (unshadowed(light, position) for light in lights)]
-    ambient = np.asarray(ambient, np.float64)
-    if model == "phong":
-        return shading.shade_phong(surface, incoming, ambient)
-    if model == "blinn_phong":
-        return shading.shade_blinn_phong(surface, incoming, ambient)
-    if model == "stripes":
-        return shading.shade_stripes(surface, incoming, ambient, toon_bands)
-    return shading.shade_toon(surface, incoming, ambient, toon_bands)
-
-
 def background_along(directions, background) -> np.ndarray:
     """What rays of unit ``directions`` (N, 3) that hit nothing see: ``background``, one
     colour (3,) or a scene's `Background` looked up by direction."""
@@ -239,8 +197,8 @@ def reflect_through(meshes: list[TriangleMesh], mirror_index: int, stencil: np.n
     real = (m[:3, :3] @ origin + m[:3, 3]) + t[:, None] * reflected[seen]
     shaded = background_along(reflected, background)
     shaded[seen] = shade_points(real, raster.normal[stencil][seen] @ h.T, -reflected[seen],
-                                raster.object_id[stencil][seen], materials, lights, ambient,
-                                model, toon_bands)
+                                raster.uv[stencil][seen], raster.object_id[stencil][seen],
+                                materials, lights, ambient, model, toon_bands)
     color[stencil] = shaded
     return color, raster
 

@@ -65,45 +65,67 @@ def shade_raster(raster: Raster, camera: Camera, materials: list[Material], ligh
         color = np.broadcast_to(np.asarray(background, np.float64), (height, width, 3)).copy()
     if not hit.any():
         return color
+    if visibility is not None and len(visibility) != len(lights):
+        raise ValueError(f"expected {len(lights)} visibility planes, got {len(visibility)}")
+    d = directions[hit]
+    seen = None if visibility is None else [
+        None if plane is None else np.asarray(plane, np.float64)[hit] for plane in visibility]
+    color[hit] = shade_points(origin + raster.depth[hit][:, None] * d, raster.normal[hit], -d,
+                              raster.uv[hit], raster.object_id[hit], materials, lights,
+                              ambient, model, toon_bands, seen)
+    return color
+
+
+def shade_points(position, normal, view, uv, object_id, materials: list[Material], lights,
+                 ambient=(0.0, 0.0, 0.0), model: str = "phong", toon_bands: int = 4,
+                 visibility=None) -> np.ndarray:
+    """The linear colour (N, 3) of N surface points seen from any direction: what
+    `shade_raster` gives a drawn pixel, and what a mirror's reflected rays and a ray
+    caster's hits get (`reference_cpu.planar_reflection`, `reference_cpu.truth`).
+
+    Parameters
+    ----------
+    position, normal : (N, 3) float64 ndarrays
+        Points (m) and unit normals.
+    view : (N, 3) float64 ndarray
+        Unit vectors from each point back along the ray that found it.
+    uv : (N, 2) float64 ndarray
+        Texture coordinates, for a material textured by uv (`surface_albedo`).
+    object_id : (N,) int ndarray
+        Which material each point has.
+    materials, lights, ambient, model, toon_bands
+        As `shade_raster`'s.
+    visibility : sequence of (N,) ndarrays or None, optional
+        As `shade_raster`'s, one value a point.
+    """
     if model == "normals":
-        color[hit] = shading.shade_normals(raster.normal[hit])
-        return color
+        return shading.shade_normals(normal)
     if model not in LIT_SHADING:
         raise ValueError(f"unknown shading model {model!r} (one of: "
                          f"{', '.join(LIT_SHADING)}, normals)")
-    d = directions[hit]
-    ids = raster.object_id[hit]
+    ids = np.asarray(object_id)
     table = {name: np.array([getattr(m, name) for m in materials], np.float64)
              for name in ("ka", "kd", "ks", "shininess")}
-    position = origin + raster.depth[hit][:, None] * d
-    surface = shading.Surface(position=position, normal=raster.normal[hit], view=-d,
-                              albedo=surface_albedo(materials, ids, position,
-                                                    raster.normal[hit], raster.uv[hit]),
-                              ka=table["ka"][ids],
-                              kd=table["kd"][ids], ks=table["ks"][ids],
+    surface = shading.Surface(position=position, normal=normal, view=view,
+                              albedo=surface_albedo(materials, ids, position, normal, uv),
+                              ka=table["ka"][ids], kd=table["kd"][ids], ks=table["ks"][ids],
                               shininess=table["shininess"][ids], object_id=ids)
-    if visibility is None:
-        visibility = [None] * len(lights)
-    elif len(visibility) != len(lights):
-        raise ValueError(f"expected {len(lights)} visibility planes, got {len(visibility)}")
     incoming = []
-    for light, seen in zip(lights, visibility):
-        to_light, _, radiance, specular, light_ambient, _ = unshadowed(light, surface.position)
+    for light, seen in zip(lights, visibility or [None] * len(lights)):
+        to_light, _, radiance, specular, light_ambient, _ = unshadowed(light, position)
         if seen is not None:
-            share = np.asarray(seen, np.float64)[hit][:, None]
+            share = np.asarray(seen, np.float64)[:, None]
             radiance = radiance * share
             specular = None if specular is None else specular * share
         incoming.append((to_light, radiance, specular, light_ambient))
     ambient = np.asarray(ambient, np.float64)
     if model == "phong":
-        color[hit] = shading.shade_phong(surface, incoming, ambient)
-    elif model == "blinn_phong":
-        color[hit] = shading.shade_blinn_phong(surface, incoming, ambient)
-    elif model == "stripes":
-        color[hit] = shading.shade_stripes(surface, incoming, ambient, toon_bands)
-    else:
-        color[hit] = shading.shade_toon(surface, incoming, ambient, toon_bands)
-    return color
+        return shading.shade_phong(surface, incoming, ambient)
+    if model == "blinn_phong":
+        return shading.shade_blinn_phong(surface, incoming, ambient)
+    if model == "stripes":
+        return shading.shade_stripes(surface, incoming, ambient, toon_bands)
+    return shading.shade_toon(surface, incoming, ambient, toon_bands)
 
 
 # --- The albedo: a material's colour, its checkerboard or its texture ---------------------------

@@ -16,9 +16,8 @@ from marchlab import render
 from marchlab.compare import boundary, dilate
 from mesh_scenes import CAMERA, turned
 from reference_cpu.planar_reflection import (clip_to_plane, mirror_matrix, mirror_plane,
-                                             mirrored_raster, render_with_mirrors, shade_points)
+                                             mirrored_raster, reflect_through, render_with_mirrors)
 from reference_cpu.rasterise import rasterise
-from reference_cpu.raster_shading import shade_raster
 from reference_cpu.shading import reflect
 from scene_model.builder import box, plane as sdf_plane
 from scene_model.camera import Camera, camera_rays
@@ -120,18 +119,35 @@ def test_object_behind_the_mirror_never_shows_in_it():
     assert (plain.object_id[stencil] == 2).sum() >= 40
 
 
-@pytest.mark.parametrize("model", ["phong", "blinn_phong", "toon", "normals"])
-def test_shade_points_on_camera_rays_is_shade_raster(model):
-    """The reflection's shading and the raster's are one formula (within 1e-15)."""
-    meshes = [plane(6.0, 6.0), turned(cube(1.0), 25, (-0.3, 0.5, 0.0))]
-    raster = rasterise(meshes, CAMERA, WIDTH, HEIGHT)
-    expected = shade_raster(raster, CAMERA, [GREY, RED], LIGHTS, (0.1, 0.1, 0.1), model)
-    origin, d = camera_rays(CAMERA, WIDTH, HEIGHT)
-    hit = raster.hit
-    got = shade_points(origin + raster.depth[hit][:, None] * d[hit], raster.normal[hit],
-                       -d[hit], raster.object_id[hit], [GREY, RED], LIGHTS, (0.1, 0.1, 0.1),
-                       model)
-    np.testing.assert_allclose(got, expected[hit], atol=1e-15)
+def test_a_mirror_shows_a_checkered_floors_squares_as_the_floor_itself_has_them():
+    """What a mirror shows is shaded as if seen directly, albedo included: the reflected
+    floor's squares are the floor's, each reflected point's colour its own square's."""
+    from reference_cpu.raster_shading import surface_albedo
+    from scene_model.scene import Checker
+    checker = Material(color=(0.5, 0.5, 0.5), checker=Checker(color_a=(0.9, 0.9, 0.9),
+                                                              color_b=(0.1, 0.1, 0.1),
+                                                              scale=0.5), ka=1.0, kd=0.0,
+                       ks=0.0)
+    turn = np.eye(4)
+    turn[:3, :3] = [[1, 0, 0], [0, 0, -1], [0, 1, 0]]
+    turn[:3, 3] = (0.0, 1.0, -1.0)
+    meshes = [plane(6.0, 6.0), transformed(plane(2.0, 2.0), turn)]
+    mirror = Material(color=(0.0, 0.0, 0.0), ka=0.0, kd=0.0, ks=0.0, kr=1.0)
+    camera = Camera(position=(0.0, 1.2, 3.0), look_at=(0.0, 0.8, -1.0), fov=50.0)
+    raster = rasterise(meshes, camera, 64, 48)
+    stencil = raster.object_id == 1
+    color, mirrored = reflect_through(meshes, 1, stencil, [checker, mirror], [], camera, 64,
+                                      48, ambient=(1.0, 1.0, 1.0))
+    floor = stencil & (mirrored.object_id == 0)
+    assert floor.sum() > 100
+    origin, d = camera_rays(camera, 64, 48)
+    m = mirror_matrix((0.0, 1.0, -1.0), (0.0, 0.0, 1.0))
+    real = (origin + mirrored.depth[floor][:, None] * d[floor]) @ m[:3, :3].T + m[:3, 3]
+    up = np.tile([0.0, 1.0, 0.0], (floor.sum(), 1))
+    expected = surface_albedo([checker], np.zeros(floor.sum(), int), real, up,
+                              np.zeros((floor.sum(), 2)))
+    np.testing.assert_allclose(color[floor], expected, atol=1e-12)
+    assert len(np.unique(color[floor][:, 0])) == 2                  # both colours of squares
 
 
 def test_floor_mirror_shows_what_the_sphere_tracers_mirror_rays_show():

@@ -19,7 +19,7 @@ Embree says which triangle a ray meets (in float32, `truth.embree`); where, is t
 float64 from that triangle's corners (Moller and Trumbore 1997, "Fast, Minimum Storage
 Ray/Triangle Intersection", J. Graphics Tools 2(1)), and the normal and texture coordinates
 are interpolated with those barycentric coordinates, as the rasteriser interpolates them.
-Every point is shaded by `planar_reflection.shade_points`, the sphere tracer's functions.
+Every point is shaded by `raster_shading.shade_points`, the sphere tracer's functions.
 """
 
 from __future__ import annotations
@@ -33,7 +33,8 @@ from scene_model.geometry import dot, normalize
 from scene_model.meshes import TriangleMesh
 from scene_model.scene import LIT_SHADING, Material
 
-from ..planar_reflection import background_along, shade_points
+from ..planar_reflection import background_along
+from ..raster_shading import shade_points
 from ..shading import reflect
 from .embree import FLOAT32_EPS, SCENE_BOX, import_embreex, scene_frame
 from .mesh import Mesh
@@ -130,22 +131,25 @@ def all_hits(meshes: list[TriangleMesh], origins, directions, max_hits: int = MA
 
 
 def surface_at(meshes: list[TriangleMesh], part: np.ndarray, triangle: np.ndarray,
-               weights: np.ndarray) -> np.ndarray:
-    """The interpolated unit normals (M, 3) at M hits (part, triangle, weights (M, 3))."""
+               weights: np.ndarray):
+    """The interpolated unit normals (M, 3) and texture coordinates (M, 2) at M hits (part,
+    triangle, weights (M, 3))."""
     normal = np.zeros((len(part), 3))
+    uv = np.zeros((len(part), 2))
     for k in np.unique(part):
         rows = part == k
-        corner_normals = meshes[k].normals[meshes[k].triangles[triangle[rows]]]   # (m, 3, 3)
-        normal[rows] = np.einsum("mc,mcx->mx", weights[rows], corner_normals)
-    return normalize(normal)
+        corners = meshes[k].triangles[triangle[rows]]                        # (m, 3)
+        normal[rows] = np.einsum("mc,mcx->mx", weights[rows], meshes[k].normals[corners])
+        uv[rows] = np.einsum("mc,mcx->mx", weights[rows], meshes[k].uvs[corners])
+    return normalize(normal), uv
 
 
 def shade_hits(meshes, hits_t, part, triangle, weights, origins, directions, materials,
                lights, ambient, model, toon_bands) -> np.ndarray:
     """The colour (M, 3) of M hits along rays (origins, directions (M, 3)), seen along them."""
     position = origins + hits_t[:, None] * directions
-    normal = surface_at(meshes, part, triangle, weights)
-    return shade_points(position, normal, -directions, part, materials, lights, ambient,
+    normal, uv = surface_at(meshes, part, triangle, weights)
+    return shade_points(position, normal, -directions, uv, part, materials, lights, ambient,
                         model, toon_bands)
 
 
