@@ -29,6 +29,11 @@ rasterisation at equal geometric error.
    kept on the GPU, nothing read back, until glFinish returns). ``--museum-only`` runs this
    part alone.
 
+5. ``--passes``: where a museum frame's time goes in the live view, pass by pass: each of
+   `MeshRenderer`'s passes timed from a glFinish before it to one after it (llvmpipe runs
+   a pass's fragments when it is flushed, so the glFinish charges each pass its own work),
+   the rest being Python, uniforms and state. ``--passes`` runs this part alone.
+
 Medians of ``--repeat`` frames after one warm-up; machines are shared and noisy, so compare
 the ratios of one run.
 """
@@ -86,10 +91,16 @@ def main() -> None:
     parser.add_argument("--lit-only", action="store_true", help="time the lit pipeline only")
     parser.add_argument("--museum-only", action="store_true",
                         help="time the museum through the three mesh backends only")
+    parser.add_argument("--passes", action="store_true",
+                        help="time the museum's live view pass by pass only")
     args = parser.parse_args()
     width, height = args.size
     from gpu_shader.raster import rasterise as gpu_rasterise
     from gpu_shader.render import device_name
+    if args.passes:
+        museum_passes(width, height, args.repeat)
+        print(f"\ngpu: {device_name()}")
+        return
     if args.museum_only:
         museum_frames(width, height, args.repeat)
         print(f"\ngpu: {device_name()}")
@@ -172,6 +183,65 @@ def museum_frames(width, height, repeat):
     for name, (run, times) in rows.items():
         seconds = median_seconds(run, times)
         print(f"| {name} | {1000 * seconds:.1f} | {1 / seconds:.1f} |", flush=True)
+    renderer.release()
+
+
+def museum_passes(width, height, repeat):
+    """Part 5: the museum's live view (`MeshRenderer.draw`), ms per pass, median of ``repeat``
+    frames after one warm-up."""
+    from gpu_shader.raster_render import MeshRenderer
+    from marchlab import load_scene
+    scene = load_scene("museum")
+    renderer = MeshRenderer(scene)
+    ctx = renderer.ctx
+    frame: dict = {}
+
+    def timed(owner, method, name, current=False):
+        """Wrap ``owner.method`` to add its time, glFinish to glFinish, to frame[name]
+        (``current``: it is called inside a ``with ctx`` block already)."""
+        run = getattr(owner, method)
+
+        def finish():
+            if current:
+                ctx.finish()
+            else:
+                with ctx:
+                    ctx.finish()
+
+        def wrapped(*args, **kwargs):
+            finish()
+            start = time.perf_counter()
+            out = run(*args, **kwargs)
+            finish()
+            label = name(args, kwargs) if callable(name) else name
+            frame[label] = frame.get(label, 0.0) + time.perf_counter() - start
+            return out
+        setattr(owner, method, wrapped)
+
+    passes = {"opaque": "lit opaque pass (with the skybox)", "mirror": "mirrored pass",
+              "layer a": "peeling passes", "layer b": "peeling passes"}
+    timed(renderer.volumes, "draw", "shadow volumes (depth, 3 lights)", current=True)
+    timed(renderer.lit, "draw_pass", lambda a, k: passes[k.get("target", "opaque")
+                                                         .replace("frame", "opaque")])
+    timed(renderer, "_composite", lambda a, k: ("mirror compositing" if a[0] == 0
+                                                 else "peeled layers compositing"))
+    frames = []
+    for _ in range(repeat + 1):
+        frame.clear()
+        start = time.perf_counter()
+        renderer.draw(scene, width, height)
+        frame["whole frame"] = time.perf_counter() - start
+        frames.append(dict(frame))
+    frames = frames[1:]
+    names = [n for n in frames[0] if n != "whole frame"]
+    print(f"\nThe museum's live view at {width}x{height}, ms per pass (median of {repeat}):\n")
+    print("| pass | ms |")
+    print("|---|---:|")
+    for name in names:
+        print(f"| {name} | {1000 * statistics.median(f.get(name, 0.0) for f in frames):.1f} |")
+    rest = [f["whole frame"] - sum(f.get(n, 0.0) for n in names) for f in frames]
+    print(f"| the rest (Python, clears, uniforms) | {1000 * statistics.median(rest):.1f} |")
+    print(f"| whole frame | {1000 * statistics.median(f['whole frame'] for f in frames):.1f} |")
     renderer.release()
 
 

@@ -45,6 +45,7 @@ MAPPING_CODES = {"triplanar": 1, "uv": 4}
 ATLAS_UNIT, PLANES_UNIT, FIRST_PLANE_UNIT = 1, 2, 3        # texture units
 PASS_UNIT = 12          # the first of the textures a pass reads (`RasterRenderer.draw_pass`)
 VARIANTS = ("opaque", "mirror", "peel", "sorted")
+KEPT_SHADERS = 16       # `RasterRenderer.shaders` keeps this many generated sets at most
 
 
 @dataclass(frozen=True)
@@ -86,12 +87,15 @@ class LitShaders:
 
 def lit_shaders(materials, lights, *, ambient=(0.0, 0.0, 0.0), model: str = "phong",
                 background=(0.0, 0.0, 0.0), toon_bands: int = 4, visibility=None,
-                fog=None, depth_range: float = 100.0, variant: str = "opaque") -> LitShaders:
+                fog=None, depth_range: float = 100.0, variant: str = "opaque",
+                prepass: bool = False) -> LitShaders:
     """The lit pipeline's shaders for a scene (the arguments as `draw`'s; of ``visibility``
     only which lights have a plane, and whether an array, a texture or a `ShadowCount`,
     matters here). ``fog`` is a `scene_model.scene.Fog` (applied where its density > 0),
     ``depth_range`` the distance the "depth" model shows black, and ``variant`` one of
-    `VARIANTS`: the plain pass, or one of the raster backend's (`gpu_shader.raster_render`)."""
+    `VARIANTS`: the plain pass, or one of the raster backend's (`gpu_shader.raster_render`).
+    With ``prepass``, the shader reads the scene's depth drawn before it (``scene_depth``,
+    a depth texture of z / (z + 1 m)) and skips the shading of fragments well behind it."""
     if model not in ("normals", "depth") and model not in LIT_SHADING:
         raise ValueError(f"unknown shading model {model!r} (one of: "
                          f"{', '.join(LIT_SHADING)}, normals, depth)")
@@ -101,11 +105,11 @@ def lit_shaders(materials, lights, *, ambient=(0.0, 0.0, 0.0), model: str = "pho
     if len(planes) != len(lights):
         raise ValueError(f"expected {len(lights)} visibility planes, got {len(planes)}")
     lit = model in LIT_SHADING                # "normals" and "depth" read no material or light
-    # What a mirror shows is shaded in its material's plain colour, as the reference's
-    # mirrored pass shades it (reference_cpu/planar_reflection.py, shade_points).
-    patterned = lit and variant != "mirror"
-    textures = [m.texture if patterned else None for m in materials]
-    checker = patterned and any(m.checker is not None for m in materials)
+    # What a mirror shows has its full albedo (checkerboards, textures at the reflected
+    # fragment's own uv), as every point the reference shades
+    # (reference_cpu/raster_shading.py, shade_points).
+    textures = [m.texture if lit else None for m in materials]
+    checker = lit and any(m.checker is not None for m in materials)
     mappings = {name: code for name, code in MAPPING_CODES.items()
                 if any(t is not None and t.mapping == name for t in textures)}
     environment = (environment_map(background) if isinstance(background, Background)
@@ -127,7 +131,8 @@ def lit_shaders(materials, lights, *, ambient=(0.0, 0.0, 0.0), model: str = "pho
     if fogged:
         uniforms |= {"fog_color": tuple(fog.color), "fog_density": float(fog.density)}
     described = _lights(lights if lit else [], planes, uniforms)
-    source = _lit_source(model, described, checker, mappings, stride, fogged, variant)
+    source = _lit_source(model, described, checker, mappings, stride, fogged, variant,
+                         prepass)
     sky_source, clear = _sky(background, environment, uniforms, variant == "mirror")
     return LitShaders(source, sky_source, clear, rows, uniforms,
                       None if atlas is None else atlas.rgba)
@@ -140,8 +145,7 @@ def _lights(lights, planes, uniforms: dict) -> list[dict]:
     described, layers = [], 0
     for i, (light, plane) in enumerate(zip(lights, planes)):
         values = light_values(light)
-        reads = ("" if plane is None else "layer" if isinstance(plane, np.ndarray)
-                 else "count" if isinstance(plane, ShadowCount) else "texture")
+        reads = _light_reads(plane)
         described.append({"index": i, "kind": LIGHT_KINDS[type(light)], "names": list(values),
                           "own": light.separate_colors(), "visibility": reads, "layer": layers})
         layers += reads == "layer"
@@ -152,7 +156,8 @@ def _lights(lights, planes, uniforms: dict) -> list[dict]:
 
 
 def _lit_source(model: str, lights: list[dict], checker: bool, mappings: dict,
-                stride: int, fog: bool = False, variant: str = "opaque") -> str:
+                stride: int, fog: bool = False, variant: str = "opaque",
+                prepass: bool = False) -> str:
     """glsl/raster/lit.frag filled in: the library functions the scene's shading calls,
     ``surface_albedo`` (glsl/raster/albedo.glsl) and ``shade_<model>``
     (glsl/pipeline/shade.glsl, the sphere tracer's, without shadow rays)."""
@@ -185,7 +190,14 @@ def _lit_source(model: str, lights: list[dict], checker: bool, mappings: dict,
         model=model, lights=lights, checker=checker, mappings=list(mappings), stride=stride,
         light_arrays=arrays, planes_read=sum(bool(light["visibility"]) for light in lights),
         array_planes=any(light["visibility"] == "layer" for light in lights),
-        sections=sections, fog=fog, variant=variant)
+        sections=sections, fog=fog, variant=variant, prepass=prepass)
+
+
+def _light_reads(plane) -> str:
+    """Where a light's visibility comes from: "" (none), "layer" (an array), "count" (a
+    `ShadowCount`) or "texture"."""
+    return ("" if plane is None else "layer" if isinstance(plane, np.ndarray)
+            else "count" if isinstance(plane, ShadowCount) else "texture")
 
 
 def light_values(light) -> dict[str, tuple]:
@@ -320,6 +332,7 @@ class RasterRenderer:
         self.vertex_arrays: dict = {}       # (program, mesh index or "sky"): vertex array
         self.targets: dict = {}             # (name, W, H): (all planes, colour and depth only)
         self.textures: dict = {}            # "atlas" / "planes": (key, texture)
+        self.generated: dict = {}           # what `shaders` was asked for: its LitShaders
 
     def draw(self, materials, lights, camera: Camera, width: int, height: int,
              **settings) -> tuple[np.ndarray, Raster]:
@@ -347,13 +360,25 @@ class RasterRenderer:
         if len(materials) != len(self.meshes):
             raise ValueError(f"expected a material for each of the {len(self.meshes)} meshes, "
                              f"got {len(materials)}")
-        return lit_shaders(materials, lights, **settings)
+        # A frame's passes ask again for the same shaders every frame: generating them (a
+        # template filled in, the material rows) costs milliseconds, so they are kept by
+        # what they are made of (of the visibility, only its kinds: the textures are bound
+        # by `draw_pass`).
+        planes = settings.get("visibility")
+        kinds = None if planes is None else tuple(_light_reads(p) for p in planes)
+        key = repr((materials, lights, kinds, sorted((k, v) for k, v in settings.items()
+                                                     if k != "visibility")))
+        if key not in self.generated:
+            if len(self.generated) >= KEPT_SHADERS:
+                self.generated.clear()
+            self.generated[key] = lit_shaders(materials, lights, **settings)
+        return self.generated[key]
 
     def draw_pass(self, shaders: LitShaders, camera: Camera, width: int, height: int, *,
                   target: str = "frame", objects=None, visibility=None, reads=None,
                   uniforms=None, vertex: str = "raster/mesh.vert", clear: bool = True,
                   sky: bool = True, cull_back_faces: bool = False, front_face: str = "cw",
-                  query=None):
+                  query=None, scissor=None):
         """Draw ``objects`` with ``shaders`` into the planes of ``target`` (one set of
         framebuffers per name and size) and return its framebuffer.
 
@@ -363,6 +388,9 @@ class RasterRenderer:
         with ``sky``, the skybox fills what no triangle covers. ``front_face`` is the winding
         of a front face in GL's window ("cw" drawn upside down; "ccw" mirrored as well).
         A ``query`` (moderngl.Query) counts the samples of the meshes' fragments that pass.
+        A ``scissor`` (x, y, w, h) in pixels (GL's window: y is the image's row) limits the
+        clear, the meshes and the skybox to that rectangle
+        (`gpu_shader.raster_render.screen_rectangle`).
         Like every method here it makes the context current itself: call it outside a
         ``with ctx`` block (moderngl's are not reentrant: the inner one's end releases it).
         """
@@ -371,14 +399,16 @@ class RasterRenderer:
             fbo, sky_fbo = self.target(target, width, height)
             program = self.program(shaders, camera, width, height, vertex=vertex,
                                    visibility=visibility, reads=reads, uniforms=uniforms)
-            if clear:
-                sky_fbo.use()
-                sky_fbo.viewport = (0, 0, width, height)
-                sky_fbo.clear(*shaders.clear, 0.0, depth=1.0)
-            fbo.use()
-            fbo.viewport = (0, 0, width, height)
-            ctx.enable(ctx.DEPTH_TEST)
             try:
+                if clear:
+                    sky_fbo.use()
+                    sky_fbo.viewport = (0, 0, width, height)
+                    sky_fbo.scissor = scissor
+                    sky_fbo.clear(*shaders.clear, 0.0, depth=1.0)
+                fbo.use()
+                fbo.viewport = (0, 0, width, height)
+                fbo.scissor = scissor
+                ctx.enable(ctx.DEPTH_TEST)
                 if cull_back_faces:
                     ctx.enable(ctx.CULL_FACE)
                     ctx.front_face = front_face
@@ -394,9 +424,11 @@ class RasterRenderer:
                     program = self.program(shaders, camera, width, height, sky=True,
                                            uniforms=uniforms)
                     sky_fbo.use()
+                    sky_fbo.scissor = scissor
                     ctx.depth_func = "<="       # only where the depth is still the clear's 1
                     self._vertex_array(program, "sky").render(vertices=3)
             finally:
+                fbo.scissor = sky_fbo.scissor = None
                 ctx.depth_func = "<"
                 ctx.disable(ctx.DEPTH_TEST | ctx.CULL_FACE)
                 ctx.front_face = "ccw"

@@ -3,10 +3,12 @@
 The same steps as the NumPy pipeline (`reference_cpu.raster_render.draw`), each a pass on the
 GPU; only the finished picture and its planes are read back:
 
-1. **Shadows** (render.shadows != "none"): each light's depth-fail shadow-volume counts
-   (`gpu_shader.raster_shadows.ShadowVolumes`), the closed opaque meshes casting.
+1. **Shadows** (render.shadows != "none"): each light's shadow-volume counts
+   (`gpu_shader.raster_shadows.ShadowVolumes`), the closed opaque meshes casting; or with
+   render.shadow_method = "map", each light's shadow map, every opaque mesh casting
+   (`gpu_shader.raster_shadow_map.shadow_map_textures`).
 2. **The opaque meshes**, lit in one draw (`gpu_shader.raster_lit`), each light's count
-   texture as its visibility (lit where 0), fog on the first hit.
+   texture (lit where 0) or map lookup as its visibility, fog on the first hit.
 3. **Flat mirrors** (kr > 0, render.reflection_depth > 0), the classic planar reflection
    (Kilgard 1999; Real-Time Rendering 3rd ed., 9.3.1): the scene mirrored about the mirror's
    plane and clipped at it (glsl/raster/mirror.vert), shaded at the real points under the
@@ -29,9 +31,11 @@ from typing import Callable
 import numpy as np
 
 from reference_cpu.planar_reflection import eye_side_normal, mirror_matrix, mirror_plane
+from reference_cpu.rasterise import NEAR
 from reference_cpu.raster_render import check_mesh_scene, mesh_frame, patches, path_labels
 from reference_cpu.render import path_step
 from reference_cpu.transparency import is_transparent, keep_only
+from scene_model.camera import Camera, camera_basis
 from scene_model.frame import Frame
 from scene_model.mesh_world import scene_meshes
 from scene_model.scene import LIT_SHADING, Scene
@@ -40,6 +44,7 @@ from .context import gl_context
 from .library import glsl_file
 from .raster import _set_camera
 from .raster_lit import RasterRenderer, ShadowCount, _compile, read_planes
+from .raster_shadow_map import shadow_map_textures
 from .raster_shadows import ShadowVolumes
 
 CLIP_DISTANCE0 = 0x3000          # GL_CLIP_DISTANCE0: moderngl has no name for it
@@ -71,25 +76,38 @@ class MeshRenderer:
     def draw(self, scene: Scene, width: int, height: int, read: bool = False):
         """Draw one frame and leave it on the GPU; return its framebuffer (attachments as
         `RasterRenderer.draw_planes`'). With ``read``, return ``(fbo, found)`` instead,
-        ``found`` what the path labels need: each light's counts (H, W), each mirror's
-        reflected (object, triangle) planes, the transparent layers per pixel."""
+        ``found`` what the path labels need: each light's counts or map visibility (H, W),
+        each mirror's reflected (object, triangle) planes, the transparent layers per
+        pixel."""
         r, camera, lights = scene.render, scene.camera, scene.lights
         lit = r.shading in LIT_SHADING
         # A depth image is black where nothing is (reference_cpu/raster_render.py, picture).
         background = (0.0, 0.0, 0.0) if r.shading == "depth" else r.background
         shade = dict(ambient=r.ambient, model=r.shading, background=background,
                      toon_bands=r.toon_bands)
-        found = {"counts": None, "mirrors": [], "layers": None}
+        found = {"counts": None, "maps": None, "mirrors": [], "layers": None}
         ctx = self.ctx
-        visibility = None
-        if r.shadows != "none" and lights:
+        visibility, maps, reads = None, [], {}
+        if r.shadows != "none" and lights and r.shadow_method == "map":
+            # A shadow map per light, every opaque mesh drawn into it (open ones too), as
+            # the NumPy pipeline's (reference_cpu/raster_render.py, draw).
             with ctx:
-                counts = self.volumes.draw(lights, camera, width, height).counts
+                maps = shadow_map_textures(ctx, [m for m in self.opaque if len(m.triangles)],
+                                           lights, camera, width, height, r.shadow_map_size,
+                                           r.shadow_bias, r.shadow_slope_bias, r.shadow_pcf)
+            visibility = maps
+            if read:
+                found["maps"] = [_read(ctx, v, width, height, 1) for v in maps]
+        elif r.shadows != "none" and lights:
+            with ctx:
+                drawn = self.volumes.draw(lights, camera, width, height)
+            counts, reads = drawn.counts, {"scene_depth": drawn.depth}
             visibility = [ShadowCount(c) for c in counts]
             if read:
                 found["counts"] = [_read(ctx, c, width, height, 1) for c in counts]
         shaders = self.lit.shaders(self.materials, lights, **shade, visibility=visibility,
-                                   fog=r.fog, depth_range=r.max_distance)
+                                   fog=r.fog, depth_range=r.max_distance,
+                                   prepass=bool(reads))
         with ctx:
             ids = self.lit.target("frame", width, height)[0].color_attachments[2]
         # The ids plane is the mirrors' stencil: last frame's ids must not stay on pixels
@@ -98,7 +116,10 @@ class MeshRenderer:
         with ctx:
             clear_ids.clear(-1.0, -1.0, -1.0, -1.0)
         fbo = self.lit.draw_pass(shaders, camera, width, height, objects=~self.clear,
-                                 visibility=visibility)
+                                 visibility=visibility, reads=reads)
+        with ctx:
+            for texture in maps:             # read by the lit pass alone
+                texture.release()
         planes = fbo.color_attachments
         if lit and r.reflection_depth > 0:
             for k in self.mirrors:
@@ -122,6 +143,8 @@ class MeshRenderer:
         visibility = None
         if found["counts"] is not None:
             visibility = [np.where(raster.hit & (c != 0), 0.0, 1.0) for c in found["counts"]]
+        if found["maps"] is not None:
+            visibility = [np.where(raster.hit, v, 1.0) for v in found["maps"]]
         label = path_labels(self.meshes, raster, visibility)
         for k, (seen, triangle) in found["mirrors"]:
             stencil = raster.object_id == k
@@ -156,17 +179,22 @@ class MeshRenderer:
         objects = ~self.clear & (np.arange(len(self.meshes)) != k)
         uniforms = {"mirror": m.T, "plane": (*normal, -float(np.dot(normal, point))),
                     "mask_id": k}
+        # Only the mirror's own pixels show its reflection: the mirrored scene, its skybox
+        # and the compositing are drawn in the mirror's rectangle on the screen alone.
+        rectangle = screen_rectangle([self.meshes[k]], camera, width, height)
         with ctx:
             ctx.enable_direct(CLIP_DISTANCE0)
         try:
             mirrored = self.lit.draw_pass(shaders, camera, width, height, target="mirror",
                                           objects=objects, reads={"mask_ids": planes[2]},
-                                          uniforms=uniforms, vertex="raster/mirror.vert")
+                                          uniforms=uniforms, vertex="raster/mirror.vert",
+                                          scissor=rectangle)
         finally:
             with ctx:
                 ctx.disable_direct(CLIP_DISTANCE0)
         self._composite(0, mirrored.color_attachments[3], planes[3], width, height,
-                        {"ids": planes[2]}, {"mask_id": k, "kr": self.materials[k].kr})
+                        {"ids": planes[2]}, {"mask_id": k, "kr": self.materials[k].kr},
+                        scissor=rectangle)
         if not read:
             return None
         ids = _read(ctx, mirrored.color_attachments[2], width, height, 4, "i4")
@@ -175,32 +203,42 @@ class MeshRenderer:
 
     def _peel(self, scene, shade, planes, width, height):
         """Depth peeling: render.peel_layers passes at most, each layer composited under
-        the ones before it, then all of them over the picture."""
+        the ones before it, then all of them over the picture; every pass, clear and step
+        only in the transparent meshes' rectangle on the screen (nothing changes outside)."""
         ctx = self.ctx
         shaders = self.lit.shaders(self.materials, scene.lights, **shade, variant="peel")
+        rectangle = screen_rectangle(keep_only(self.meshes, self.clear), scene.camera, width,
+                                     height)
         accumulator = self._texture("accumulator", width, height, 4)
         into_accumulator = self._framebuffer("accumulator", accumulator)
         with ctx:
-            into_accumulator.clear(0.0, 0.0, 0.0, 1.0)
             previous = self.lit.target("layer b", width, height)[0]
-            previous.clear(0.0, 0.0, 0.0, -1.0)          # the first pass peels from t > -1
+            try:
+                for fbo, value in ((into_accumulator, 1.0), (previous, -1.0)):
+                    fbo.scissor = rectangle      # the first pass peels from t > -1
+                    fbo.clear(0.0, 0.0, 0.0, value)
+            finally:
+                into_accumulator.scissor = previous.scissor = None
             query = self.extra.setdefault("query", ctx.query(samples=True))
         for layer in range(scene.render.peel_layers):
             name = "layer a" if layer % 2 == 0 else "layer b"
             with ctx:
                 current = self.lit.target(name, width, height)[0]
+                current.scissor = rectangle
                 current.clear(0.0, 0.0, 0.0, NOTHING_PEELED)
+                current.scissor = None
             self.lit.draw_pass(shaders, scene.camera, width, height, target=name,
-                               objects=self.clear, sky=False, query=query, reads={
-                                   "opaque_planes": planes[0], "opaque_color": planes[3],
-                                   "previous_layer": previous.color_attachments[0]})
+                               objects=self.clear, sky=False, query=query, scissor=rectangle,
+                               reads={"opaque_planes": planes[0], "opaque_color": planes[3],
+                                      "previous_layer": previous.color_attachments[0]})
             with ctx:
                 peeled = query.samples
             if peeled == 0:
                 break                    # every pixel's layers are peeled
-            self._composite(1, current.color_attachments[3], accumulator, width, height)
+            self._composite(1, current.color_attachments[3], accumulator, width, height,
+                            scissor=rectangle)
             previous = current
-        self._composite(2, accumulator, planes[3], width, height)
+        self._composite(2, accumulator, planes[3], width, height, scissor=rectangle)
 
     def _blend_sorted(self, scene, shade, planes, width, height):
         """Sorted blending: the transparent triangles from the farthest to the nearest (by
@@ -268,10 +306,11 @@ class MeshRenderer:
         layers = _read(ctx, counts, width, height, 1)
         return np.minimum(layers, scene.render.peel_layers).astype(np.int64)
 
-    def _composite(self, step, source, target, width, height, reads=None, uniforms=None):
-        """One step of glsl/raster/composite.frag over the whole of ``target``: 0 adds a
-        mirror's reflection, 1 puts a peeled layer under the accumulator, 2 the accumulator
-        over the picture. The picture's alpha (1 where drawn) is kept."""
+    def _composite(self, step, source, target, width, height, reads=None, uniforms=None,
+                   scissor=None):
+        """One step of glsl/raster/composite.frag over ``target`` (within ``scissor``, if
+        given): 0 adds a mirror's reflection, 1 puts a peeled layer under the accumulator,
+        2 the accumulator over the picture. The picture's alpha (1 where drawn) is kept."""
         ctx = self.ctx
         blending = {0: (ctx.ONE, ctx.ONE, ctx.ZERO, ctx.ONE),
                     1: (ctx.DST_ALPHA, ctx.ONE, ctx.ZERO, ctx.ONE_MINUS_SRC_ALPHA),
@@ -284,6 +323,7 @@ class MeshRenderer:
             self.lit._bind(program, {"source": source, **(reads or {})}, uniforms or {})
             fbo.use()
             fbo.viewport = (0, 0, width, height)
+            fbo.scissor = scissor
             ctx.enable(ctx.BLEND)
             ctx.blend_func = blending
             try:
@@ -292,6 +332,7 @@ class MeshRenderer:
                     vao = self.extra[("vao", program)] = ctx.vertex_array(program, [])
                 vao.render(vertices=3)
             finally:
+                fbo.scissor = None
                 ctx.disable(ctx.BLEND)
                 ctx.blend_func = ctx.DEFAULT_BLENDING
 
@@ -308,6 +349,31 @@ class MeshRenderer:
             with self.ctx:
                 self.extra[key] = self.ctx.framebuffer(color_attachments=list(attachments))
         return self.extra[key]
+
+
+def screen_rectangle(meshes, camera: Camera, width: int, height: int):
+    """The pixels (x, y, w, h) that ``meshes`` can cover, as a scissor rectangle (x the
+    column, y the image's row: GL's window, the picture being drawn upside down): their
+    vertices that triangles use, projected as glsl/raster/mesh.vert projects them, with a
+    pixel to spare. None
+    (the whole screen) if a vertex lies at or behind the near plane, where the projection
+    turns over; (0, 0, 0, 0) if they have no vertex on the screen."""
+    points = np.concatenate([np.zeros((0, 3))] + [m.positions[np.unique(m.triangles)]
+                                                  for m in meshes])   # vertices drawn only
+    forward, right, up = camera_basis(camera)
+    offset = points - np.asarray(camera.position, np.float64)
+    z = offset @ forward
+    if np.any(z <= NEAR):
+        return None
+    if len(points) == 0:
+        return (0, 0, 0, 0)
+    half_height = np.tan(np.radians(camera.fov) / 2)
+    x = ((offset @ right) / (z * half_height * width / height) + 1) * width / 2
+    y = (1 - (offset @ up) / (z * half_height)) * height / 2
+    low = np.maximum(np.floor([x.min(), y.min()]) - 1, 0).astype(int)
+    high = np.minimum(np.ceil([x.max(), y.max()]) + 1, [width, height]).astype(int)
+    size = np.maximum(high - low, 0)
+    return (int(low[0]), int(low[1]), int(size[0]), int(size[1]))
 
 
 def _read(ctx, texture, width, height, components, dtype="f4") -> np.ndarray:

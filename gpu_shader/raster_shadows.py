@@ -23,6 +23,16 @@ the surface drawn, as the depth-fail rule asks. Then, per light, the volumes of 
 closed mesh (open ones cast none) into that light's count texture. A directional light's
 extruded vertices are all one point at infinity, so its back cap has no area (their
 section 5.3): it is drawn, and covers nothing.
+
+**Z-pass where it is exact.** Depth-fail needs the caps, and a point light's back cap at
+infinity can cover much of the screen. Counting the other way, z-pass (Heidmann 1991: front
+faces *in front of* the surface add 1, back faces subtract 1) gives the same integer on every
+pixel whenever the eye is outside the volume and no volume face crosses the near plane, and
+then needs no caps at all: a front cap lies on the occluder, so it is never in front of the
+depth drawn, and the back cap lies at infinity. Everitt and Kilgard's test for it (section
+6) is whether the occluder meets the pyramid from the light to the near plane's rectangle;
+`needs_depth_fail` checks it conservatively with the occluder's bounding sphere, volume by
+volume, and keeps depth-fail with caps where it may be needed.
 """
 
 from __future__ import annotations
@@ -31,7 +41,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from reference_cpu.shadow_volumes import facing_light, light_source, neighbours, silhouette_edges
+from reference_cpu.rasterise import NEAR
+from reference_cpu.shadow_volumes import facing_light, light_source, neighbours
 from scene_model.camera import Camera
 from scene_model.meshes import TriangleMesh
 
@@ -73,17 +84,56 @@ def volume_vertices(mesh: TriangleMesh, light) -> np.ndarray:
                            np.c_[at_infinity, np.zeros(len(mesh.positions))]]).astype(np.float32)
 
 
-def volume_triangles(mesh: TriangleMesh, light) -> np.ndarray:
+def volume_triangles(mesh: TriangleMesh, light, across=None) -> np.ndarray:
     """(T', 3) int32 indices into `volume_vertices`: the front cap (light-facing triangles),
     the sides (each silhouette edge a -> b as the quad b, a, a', b') and the back cap
-    (light-averted triangles at infinity), all wound outward, as in the NumPy reference."""
+    (light-averted triangles at infinity), all wound outward, as in the NumPy reference.
+    ``across``: the mesh's `neighbours`, if known (they do not change with the light)."""
+    return np.concatenate(volume_parts(mesh, light, across)).astype(np.int32)
+
+
+def volume_parts(mesh: TriangleMesh, light, across=None) -> tuple:
+    """`volume_triangles` in its three parts: (front cap, sides, back cap), each (n, 3)."""
     count = len(mesh.positions)
+    across = neighbours(mesh) if across is None else across
+    if across is None:
+        raise ValueError("a shadow volume needs a closed mesh (see neighbours)")
     lit = facing_light(mesh, light)
-    a, b = silhouette_edges(mesh, light).T
+    # The silhouette edges (reference_cpu.shadow_volumes.silhouette_edges, the neighbours
+    # found once per mesh): a light-facing triangle's edge to a light-averted one.
+    triangle, k = np.nonzero(lit[:, None] & ~lit[across])
+    a, b = mesh.triangles[triangle, k], mesh.triangles[triangle, (k + 1) % 3]
     sides = np.concatenate([np.stack([b, a, a + count], 1),
-                            np.stack([b, a + count, b + count], 1)])
-    return np.concatenate([mesh.triangles[lit], sides,
-                           mesh.triangles[~lit] + count]).astype(np.int32)
+                            np.stack([b, a + count, b + count], 1)]).reshape(-1, 3)
+    return mesh.triangles[lit], sides, mesh.triangles[~lit] + count
+
+
+def bounding_sphere(mesh: TriangleMesh) -> tuple[np.ndarray, float]:
+    """A sphere round the mesh: its bounding box's centre, and the farthest vertex's distance."""
+    centre = (mesh.positions.min(axis=0) + mesh.positions.max(axis=0)) / 2
+    return centre, float(np.linalg.norm(mesh.positions - centre, axis=1).max())
+
+
+def needs_depth_fail(sphere, light, camera: Camera, width: int, height: int) -> bool:
+    """Whether the volume cast from ``light`` by an occluder inside ``sphere`` (centre,
+    radius) may hold the eye or cross the near plane, so that z-pass would miscount.
+
+    A point q lies in a point light's volume when the segment from the light to q passes
+    through the occluder (for a directional light, the ray from q towards the light), so
+    the volume meets the near plane's rectangle (and the eye behind it) only if the occluder
+    meets the pyramid from the light to that rectangle (Everitt and Kilgard 2002, section
+    6). The pyramid lies within r of the segment from the light to the eye, r the distance
+    from the eye to the rectangle's corners: a sphere farther than its radius plus r from
+    that segment misses it. Conservative: True is always safe (depth-fail is exact)."""
+    centre, radius = sphere
+    eye = np.asarray(camera.position, np.float64)
+    half_height = np.tan(np.radians(camera.fov) / 2)
+    reach = 2 * NEAR * np.sqrt(1 + half_height ** 2 * (1 + (width / height) ** 2))
+    position, direction = light_source(light)
+    along = -direction * (1e6 + np.linalg.norm(centre - eye)) if position is None \
+        else position - eye                               # eye to light (or far towards it)
+    s = np.clip(np.dot(centre - eye, along) / max(np.dot(along, along), 1e-300), 0.0, 1.0)
+    return bool(np.linalg.norm(centre - (eye + s * along)) <= radius * (1 + 1e-6) + reach)
 
 
 class ShadowVolumes:
@@ -98,21 +148,27 @@ class ShadowVolumes:
         Every opaque mesh, in world coordinates: all of them write depth, the closed ones
         (`reference_cpu.shadow_volumes.neighbours`) cast.
     ctx : moderngl.Context
+    z_pass : bool
+        Count by z-pass without caps where that is exact (default); False: depth-fail with
+        caps everywhere, the textbook version.
     """
 
-    def __init__(self, meshes: list[TriangleMesh], ctx):
-        self.ctx = ctx
+    def __init__(self, meshes: list[TriangleMesh], ctx, z_pass: bool = True):
+        self.ctx, self.z_pass = ctx, z_pass
         self.meshes = [m for m in meshes if len(m.triangles)]
-        self.closed = [neighbours(m) is not None for m in self.meshes]
+        self.across = [neighbours(m) for m in self.meshes]     # None: open, casts nothing
+        self.spheres = [bounding_sphere(m) for m in self.meshes]
         self.program = _program(ctx)
         self.scene = [_upload(ctx, self.program, np.c_[m.positions, np.ones(len(m.positions))],
                               m.triangles) for m in self.meshes]
-        self.volumes: dict = {}             # (mesh index, light): its volume's GL objects
+        self.volumes: dict = {}             # (mesh index, light index): (light, GL objects)
         self.targets: dict = {}             # (W, H, lights): depth, counts, framebuffers
 
     def draw(self, lights, camera: Camera, width: int, height: int) -> ShadowCounts:
         """Draw the scene's depth and every light's shadow volumes (the textures returned
-        belong to this object: drawn again next frame, released by `release`)."""
+        belong to this object: drawn again next frame, released by `release`). Each volume
+        is counted by z-pass without caps where that is exact (`needs_depth_fail`), else
+        by depth-fail with its caps."""
         ctx, program = self.ctx, self.program
         depth, counts, scene, fbos = self._target(width, height, len(lights))
         try:
@@ -125,18 +181,27 @@ class ShadowVolumes:
             ctx.front_face = "cw"                  # drawn upside down (gpu_shader/raster.py)
             for _, _, vao in self.scene:           # every mesh writes depth, closed or not
                 vao.render()
-            ctx.depth_func = ">="                  # depth-fail: count where LESS fails
             ctx.enable(ctx.BLEND)
             ctx.blend_func = ctx.ONE, ctx.ONE
             ctx.blend_equation = ctx.FUNC_ADD
-            for light, fbo in zip(lights, fbos):
+            for i, (light, fbo) in enumerate(zip(lights, fbos)):
                 fbo.use()
                 fbo.viewport = (0, 0, width, height)
                 fbo.depth_mask = False
                 fbo.clear(0.0, 0.0, 0.0, 0.0)
-                for k, mesh in enumerate(self.meshes):
-                    if self.closed[k]:
-                        self._volume(k, light).render()
+                for k, sphere in enumerate(self.spheres):
+                    if self.across[k] is None:
+                        continue
+                    vao, (caps, sides) = self._volume(k, i, light)
+                    if not self.z_pass or needs_depth_fail(sphere, light, camera, width,
+                                                           height):
+                        ctx.depth_func = ">="          # depth-fail: count where LESS fails
+                        program["front_count"].value = -1.0
+                        vao.render()
+                    else:
+                        ctx.depth_func = "<"           # z-pass: count where LESS passes
+                        program["front_count"].value = 1.0
+                        vao.render(first=3 * caps, vertices=3 * sides)
                 fbo.depth_mask = True
         finally:
             ctx.disable(ctx.DEPTH_TEST | ctx.BLEND)
@@ -147,29 +212,35 @@ class ShadowVolumes:
 
     def release(self, keep=()) -> None:
         """Free every GL object made here but the textures in ``keep``."""
-        made = [o for objects in [*self.scene, *self.volumes.values()] for o in objects]
+        made = [o for objects in self.scene for o in objects]
+        made += [o for _, (objects, _) in self.volumes.values() for o in objects]
         for depth, counts, scene, fbos in self.targets.values():
             made += [*fbos, scene] + [t for t in [depth, *counts] if t not in keep]
         for gl_object in made:
             gl_object.release()
         self.scene, self.volumes, self.targets = [], {}, {}
 
-    def _volume(self, k: int, light):
-        """The vertex array of mesh k's volume for ``light``, built when the light is new."""
-        key = (k, repr(light))
+    def _volume(self, k: int, i: int, light):
+        """Mesh k's volume for light i: its vertex array and (front cap, side) triangle
+        counts, built again only when that light has changed."""
+        key, seen = (k, i), repr(light)
+        if key in self.volumes and self.volumes[key][0] != seen:
+            for gl_object in self.volumes.pop(key)[1][0]:
+                gl_object.release()
         if key not in self.volumes:
-            for old in [old for old in self.volumes if old[0] == k]:
-                for gl_object in self.volumes.pop(old):
-                    gl_object.release()
             mesh = self.meshes[k]
-            self.volumes[key] = _upload(self.ctx, self.program, volume_vertices(mesh, light),
-                                        volume_triangles(mesh, light))
-        return self.volumes[key][2]
+            caps, sides, back = volume_parts(mesh, light, self.across[k])
+            objects = _upload(self.ctx, self.program, volume_vertices(mesh, light),
+                              np.concatenate([caps, sides, back]))
+            self.volumes[key] = (seen, (objects, (len(caps), len(sides))))
+        objects, parts = self.volumes[key][1]
+        return objects[2], parts
 
     def _target(self, width: int, height: int, lights: int):
         key = (width, height, lights)
         if key not in self.targets:
             depth = self.ctx.depth_texture((width, height))
+            depth.compare_func = ""              # read as a depth, not a shadow comparison
             counts = [self.ctx.texture((width, height), 1, dtype="f4") for _ in range(lights)]
             self.targets[key] = (depth, counts, self.ctx.framebuffer(depth_attachment=depth),
                                  [self.ctx.framebuffer(color_attachments=[c],

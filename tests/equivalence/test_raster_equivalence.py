@@ -19,10 +19,11 @@ from __future__ import annotations
 
 import copy
 
+import numpy as np
 import pytest
 
 from marchlab import load_scene, render
-from marchlab.compare import compare_frames, failures, gates_against
+from marchlab.compare import boundary, compare_frames, dilate, failures, gates_against
 from required_backends import need_backend
 from scene_model.scenefile import scene_from_dict, scene_to_dict
 
@@ -60,6 +61,9 @@ def floor_with(pattern):
 
 SPOT = {"type": "spot", "position": [-1.5, 3.5, 2.0], "direction": [0.4, -1.0, -0.5],
         "intensity": 1.5, "inner_angle": 20.0, "outer_angle": 30.0}
+MIRROR_MATERIAL = {"mirror": {"color": [0.9, 0.9, 0.95], "kd": 0.1, "ks": 0.6, "kr": 0.8}}
+THREE = [BASE["lights"][0], SPOT, {"type": "directional", "direction": [-0.3, -1.0, 0.6],
+                                   "intensity": 0.4}]
 CASES = {
     **{f"shading {model}": lambda model=model: changed({"shading": model})
        for model in ("phong", "blinn_phong", "toon", "stripes", "normals", "depth")},
@@ -67,9 +71,7 @@ CASES = {
     "directional light, shadows": lambda: changed(lights=[
         {"type": "directional", "direction": [0.5, -1.0, -0.4], "intensity": 0.9}]),
     "spot light, shadows": lambda: changed(lights=[SPOT]),
-    "three lights, shadows": lambda: changed(lights=[
-        BASE["lights"][0], SPOT, {"type": "directional", "direction": [-0.3, -1.0, 0.6],
-                                  "intensity": 0.4}]),
+    "three lights, shadows": lambda: changed(lights=THREE),
     "checker": lambda: changed(materials=floor_with(
         {"checker": {"color_a": [0.9, 0.9, 0.85], "color_b": [0.2, 0.2, 0.25], "scale": 0.5}})),
     "uv texture": lambda: changed(materials=floor_with(
@@ -79,14 +81,19 @@ CASES = {
     "studio background": lambda: changed({"background": {"type": "studio", "size": 16}}),
     "solid background": lambda: changed({"background": {"type": "solid",
                                                          "color": [0.1, 0.2, 0.3]}}),
-    "mirror": lambda: changed({"reflection_depth": 1}, meshes=[MIRROR], materials={
-        "mirror": {"color": [0.9, 0.9, 0.95], "kd": 0.1, "ks": 0.6, "kr": 0.8}}),
+    "mirror": lambda: changed({"reflection_depth": 1}, meshes=[MIRROR],
+                              materials=MIRROR_MATERIAL),
+    "mirror of a uv-textured floor": lambda: changed({"reflection_depth": 1}, meshes=[MIRROR],
+                                                    materials={**MIRROR_MATERIAL, **floor_with(
+                                                        {"texture": {"mapping": "uv",
+                                                                     "scale": 0.5}})}),
     "glass pane, depth peeling": lambda: changed(meshes=[PANE], materials={
         "glass": {"color": [0.7, 0.85, 0.95], "ks": 0.8, "transparency": 0.6}}),
     "glass pane, sorted": lambda: changed({"blending": "sorted"}, meshes=[PANE], materials={
         "glass": {"color": [0.7, 0.85, 0.95], "ks": 0.8, "transparency": 0.6}}),
     "turned hierarchy": lambda: changed(meshes=[HIERARCHY]),
     "fog": lambda: changed({"fog": {"color": [0.8, 0.85, 0.9], "density": 0.15}}),
+    "three lights, shadow maps": lambda: changed({"shadow_method": "map"}, lights=THREE),
 }
 SCENES = {"bundled meshes": lambda: load_scene("meshes"),
           "bundled museum": lambda: load_scene("museum"), **CASES}
@@ -102,8 +109,9 @@ def assert_passes(reference_backend, candidate_backend, scene):
 
 # Sorted blending orders whole triangles by their centroids, which is not the order along
 # every ray (reference_cpu/transparency.py): against the ray-cast truth, which composites every
-# surface by its depth, only depth peeling is held to the gates.
-EXACT = [name for name in SCENES if "sorted" not in name]
+# surface by its depth, only depth peeling is held to the gates. Shadow maps are an
+# approximation the ray caster does not make (it has exact shadows only).
+EXACT = [name for name in SCENES if "sorted" not in name and "map" not in name]
 
 
 @pytest.mark.parametrize("case", EXACT)
@@ -116,3 +124,21 @@ def test_numpy_raster_matches_embree_under_the_mesh_gates(case):
 def test_gpu_raster_matches_numpy_raster_under_the_mesh_gates(case):
     need_backend("raster")
     assert_passes("numpy-raster", "raster", SCENES[case]())
+
+
+def test_gpu_shadow_maps_differ_from_numpy_only_on_rounding_pixels_at_shadow_edges():
+    """The two maps hold the same depths but for float32 rounding (the NumPy one float64),
+    so a pixel whose depth lies within rounding of the stored depth plus the bias may fall
+    on the other side. At 96 x 72 (the case above) no pixel does; at 320 x 240 under three
+    lights, 5 of 76,800 did on llvmpipe, each on a shadow's edge: at most 0.02% may, and
+    only within a pixel of an edge of the reference's path labels."""
+    need_backend("raster")
+    scene = changed({"shadow_method": "map"}, lights=THREE)
+    a = render(scene, 320, 240, backend="numpy-raster")
+    b = render(scene, 320, 240, backend="raster")
+    differ = a.path != b.path
+    assert a.hit.sum() > 30000                     # the floor and the shapes fill the view
+    assert differ.sum() <= 0.0002 * differ.size
+    assert not (differ & ~dilate(boundary(a.path), 1)).any()
+    wrong = np.abs(a.color - b.color).max(axis=-1) > 2 / 255
+    assert not (wrong & ~dilate(differ, 1)).any()

@@ -88,3 +88,35 @@ def test_an_open_floor_alone_casts_no_shadow(gpu, light):
     meshes = [plane(8.0, 8.0, 4)]
     visibility = shadow_volume_visibility(meshes, [light], CAMERA, WIDTH, HEIGHT)[0]
     assert np.all(visibility == 1)
+
+
+def test_z_pass_without_caps_counts_as_depth_fail_with_caps(gpu):
+    """Where `needs_depth_fail` allows z-pass, its counts equal depth-fail's on every pixel
+    (integers, exactly), for the museum's three lights, from its camera and from one low
+    among the plinths where 16 of the 48 volumes keep depth-fail."""
+    from gpu_shader.context import gl_context
+    from gpu_shader.raster_shadows import ShadowVolumes, bounding_sphere, needs_depth_fail
+    from marchlab import load_scene
+    from reference_cpu.transparency import is_transparent, keep_only
+    from scene_model.mesh_world import scene_meshes
+    scene = load_scene("museum")
+    meshes, materials = scene_meshes(scene)
+    opaque = [m for m in keep_only(meshes, ~is_transparent(materials)) if len(m.triangles)]
+    inside = Camera(position=(-0.3, 0.9, -1.4), look_at=(0.0, 0.6, 3.0), fov=60.0)
+    ctx = gl_context()
+    for camera in (scene.camera, inside):
+        chosen = [needs_depth_fail(bounding_sphere(m), light, camera, 80, 60)
+                  for m in opaque for light in scene.lights]
+        assert not all(chosen)                       # some volumes are counted by z-pass
+        counted = []
+        for z_pass in (True, False):
+            with ctx:
+                volumes = ShadowVolumes(opaque, ctx, z_pass=z_pass)
+                try:
+                    drawn = volumes.draw(scene.lights, camera, 80, 60)
+                    counted.append([np.frombuffer(c.read(), np.float32) for c in drawn.counts])
+                finally:
+                    volumes.release()
+        assert any((c != 0).sum() > 100 for c in counted[1])      # shadows are drawn
+        for fast, textbook in zip(*counted):
+            np.testing.assert_array_equal(fast, textbook)

@@ -112,6 +112,14 @@ uniform sampler2D opaque_color;                // ... and its colour (a: 1 where
 uniform sampler2D previous_layer;              // the previous pass's planes (w: t; -1 at first)
 {% endif %}
 {% endif %}
+{% if prepass %}
+
+// The scene's depth drawn before this pass (by the shadow volumes' pass,
+// gpu_shader/raster_shadows.py), z / (z + 1 m) as this pass's: a fragment well behind it
+// loses the depth test anyway, so it is dropped before its shading, and the heavy part of
+// this shader runs about once per pixel. The margin keeps every fragment that might win.
+uniform sampler2D scene_depth;
+{% endif %}
 {% if mappings %}
 {{ texel_reader | trim }}
 {% endif %}
@@ -130,6 +138,11 @@ layout(location = 3) out vec4 out_color;       // rgb: linear colour, a: 1 (draw
 void main()
 {
     ivec2 pixel = ivec2(gl_FragCoord.xy);
+{% if prepass %}
+    if (v_z / (v_z + 1.0) > texelFetch(scene_depth, pixel, 0).r * (1.0 + 1e-5)) {
+        discard;                               // hidden: another surface lies in front
+    }
+{% endif %}
 {% if variant == "mirror" %}
     if (texelFetch(mask_ids, pixel, 0).x != mask_id) {
         discard;                               // not the mirror's pixel: nothing to show
