@@ -231,13 +231,23 @@ def composite_over(meshes: list[TriangleMesh], materials: list[Material], lights
     origin, directions = camera_rays(camera, width, height)
     d = directions.reshape(-1, 3)
     hits = all_hits(meshes, origin, d, max_hits)
+    color, layers = front_to_back(meshes, materials, lights, hits, origin, d,
+                                  color.reshape(-1, 3), opaque_depth.ravel(), ambient, model,
+                                  toon_bands)
+    return color.reshape(height, width, 3), layers.reshape(height, width)
+
+
+def front_to_back(meshes, materials, lights, hits: Hits, origin, d, behind, limit, ambient,
+                  model, toon_bands):
+    """The surfaces ``hits`` along N rays from ``origin`` along ``d`` (N, 3), those nearer
+    than ``limit`` (N,), composited front to back with opacity 1 - transparency over the
+    colour ``behind`` (N, 3): the colour (N, 3) and how many surfaces each ray crossed."""
     alpha = 1.0 - np.array([m.transparency for m in materials], np.float64)
     front = np.zeros((len(d), 3))
-    through = np.ones(len(d))
+    through = np.ones(len(d))                     # what still gets through (transmittance)
     layers = np.zeros(len(d), int)
     o = np.broadcast_to(origin, d.shape)
-    limit = opaque_depth.ravel()
-    for layer in range(max_hits):
+    for layer in range(hits.t.shape[1]):
         on = (hits.part[:, layer] >= 0) & (hits.t[:, layer] < limit) & (through > 0)
         if not on.any():
             break
@@ -248,8 +258,7 @@ def composite_over(meshes: list[TriangleMesh], materials: list[Material], lights
         front[on] += (through[on] * alpha[k])[:, None] * c
         through[on] *= 1.0 - alpha[k]
         layers[on] += 1
-    return ((front + through[:, None] * color.reshape(-1, 3)).reshape(height, width, 3),
-            layers.reshape(height, width))
+    return front + through[:, None] * behind, layers
 
 
 def ordered_composite(meshes: list[TriangleMesh], materials: list[Material], lights,
@@ -269,19 +278,7 @@ def ordered_composite(meshes: list[TriangleMesh], materials: list[Material], lig
     origin, directions = camera_rays(camera, width, height)
     d = directions.reshape(-1, 3)
     hits = all_hits(meshes, origin, d, max_hits)
-    alpha = 1.0 - np.array([m.transparency for m in materials], np.float64)
-    front = np.zeros((len(d), 3))
-    through = np.ones(len(d))                     # what still gets through (transmittance)
-    o = np.broadcast_to(origin, d.shape)
-    for layer in range(max_hits):
-        on = (hits.part[:, layer] >= 0) & (through > 0)
-        if not on.any():
-            break
-        k = hits.part[on, layer]
-        c = shade_hits(meshes, hits.t[on, layer], k, hits.triangle[on, layer],
-                       hits.weights[on, layer], o[on], d[on], materials, lights, ambient,
-                       model, toon_bands)
-        front[on] += (through[on] * alpha[k])[:, None] * c
-        through[on] *= 1.0 - alpha[k]
-    color = front + through[:, None] * background_along(d, background)
+    color, _ = front_to_back(meshes, materials, lights, hits, origin, d,
+                             background_along(d, background), np.full(len(d), np.inf),
+                             ambient, model, toon_bands)
     return color.reshape(height, width, 3), hits
