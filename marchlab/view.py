@@ -32,6 +32,7 @@ from scene_model.errors import MarchlabError, SceneError
 from scene_model.files import write_atomically
 from scene_model.scene import Scene, rendered_scene, scene_at
 from scene_model.scenefile import load_scene, scene_path, scene_to_toml
+from scene_model.timeline import scene_at_time
 from scene_model import editing
 
 from . import camera_control
@@ -94,6 +95,8 @@ class Viewer:
         self._held_keys: set[str] = set()
         self._holding = None         # what a left drag carries (`press`)
         self._gesture = 0            # one undo step per drag
+        self.animation_time: float | None = None   # the keyframes' clock (None: as written)
+        self.animating = False       # the clock runs
         self.open(source)
 
     # --- the scene -------------------------------------------------------------------------
@@ -112,6 +115,7 @@ class Viewer:
         self.selection = None
         self.saved_scene = scene
         self._reset_playback()
+        self.rewind_animation()
         self.status = f"opened {self.source}"
 
     @property
@@ -213,18 +217,31 @@ class Viewer:
         self.selection = None if path is None else tuple(path)
 
     def selected_ids(self) -> tuple[int, ...]:
-        """Object ids of the selected node's primitives (what the outline surrounds)."""
+        """Object ids of the selected node's primitives (what the outline surrounds); of a
+        selected mesh, ``("mesh", i)``, those of its parts and its children's."""
         if self.selection is None:
             return ()
+        if self.selection[0] == "mesh":
+            return mesh_ids(self.history.scene, self.selection[1])
         return editing.primitive_ids(self.history.scene, self.selection)
 
     def pick(self, object_id: int) -> None:
-        """Select the object a click hit (its object id; -1: nothing)."""
-        path = editing.object_path(self.history.scene, object_id) if object_id >= 0 else None
+        """Select the object a click hit (its object id; -1: nothing): in a scene of
+        triangle meshes the top-level mesh node ``("mesh", i)`` that holds it."""
+        scene = self.history.scene
+        if scene.meshes:
+            index = mesh_holding(scene, object_id)
+            self.selection = None if index is None else ("mesh", index)
+            return
+        path = editing.object_path(scene, object_id) if object_id >= 0 else None
         self.selection = path if isinstance(path, tuple) and path and path[0] != "body" else None
 
     def add_object(self, kind: str) -> None:
-        """Add a new node of ``kind`` into the selected operator, or else at the top level."""
+        """Add a new node of ``kind`` into the selected operator, or else at the top level.
+        A scene of triangle meshes takes no SDF objects: refused, saying so."""
+        if self.history.scene.meshes:
+            raise MarchlabError(f"cannot add a {kind}: this scene is made of triangle meshes, "
+                                "and SDF objects are drawn by the sphere tracer")
         node = editing.default_node(kind)
         try:
             scene, path = editing.add_object(self.history.scene, node, self.selection)
@@ -234,15 +251,27 @@ class Viewer:
         self.selection = path
 
     def duplicate_selected(self) -> None:
+        if self._mesh_selected("duplicated"):
+            return
         if self.selection is not None:
             scene, path = editing.duplicate(self.history.scene, self.selection)
             self.edit(scene, "duplicate")
             self.selection = path
 
     def delete_selected(self) -> None:
+        if self._mesh_selected("deleted"):
+            return
         if self.selection is not None:
             self.edit(editing.delete(self.history.scene, self.selection), "delete")
             self.selection = None
+
+    def _mesh_selected(self, done: str) -> bool:
+        """Whether the selection is a mesh node, which the object tools leave alone (saying
+        so): its [[meshes]] table is edited in the panel or the scene file."""
+        if self.selection is not None and self.selection[0] == "mesh":
+            self.status = f"not {done}: meshes are added and removed in the scene file"
+            return True
+        return False
 
     def reparent_selected(self, parent) -> None:
         if self.selection is not None:
@@ -328,9 +357,12 @@ class Viewer:
             self.playback = None
 
     def advance(self, seconds: float) -> None:
-        """One frame of ``seconds``: play the physics, fly with the keys held."""
+        """One frame of ``seconds``: play the physics and the keyframes, fly with the keys
+        held."""
         if self.playback is not None:
             self.playback.advance(seconds)
+        if self.animating:
+            self.animation_time = (self.animation_time or 0.0) + seconds
         if self._held_keys:
             self.fly(self._held_keys - {"SHIFT"}, seconds, fast="SHIFT" in self._held_keys)
 
@@ -371,6 +403,39 @@ class Viewer:
         t = ((np.asarray(point) - origin) @ normal) / denominator
         return origin + t * direction if t > 0 else None
 
+    # --- keyframes ----------------------------------------------------------------------------
+
+    @property
+    def animated(self) -> bool:
+        """Whether the scene has keyframes to play."""
+        return bool(self.history.scene.keyframes)
+
+    def play_animation(self, playing: bool = True) -> None:
+        """Run (or stop) the keyframes' clock; it starts at 0 s from the scene as written."""
+        if playing and self.animation_time is None:
+            self.animation_time = 0.0
+        self.animating = bool(playing) and self.animated
+
+    def set_animation_time(self, seconds: float) -> None:
+        """Show the keyframed scene at ``seconds`` (the clock goes on from there if it runs)."""
+        self.animation_time = max(float(seconds), 0.0)
+
+    def rewind_animation(self) -> None:
+        """Stop the clock and show the scene as written again (as `marchlab render` draws
+        it: keyframes are applied only once the clock has started)."""
+        self.animation_time, self.animating = None, False
+
+    def toggle_play(self) -> None:
+        """Space: play or pause the physics, or else the keyframes."""
+        if self.playback is not None:
+            self.playback.pause() if self.playback.playing else self.playback.play()
+        elif self.animated:
+            self.play_animation(not self.animating)
+
+    def animation_length(self) -> float:
+        """The last key time of any keyframed field (s): one loop of the animation."""
+        return max((max(keys.times) for keys in self.history.scene.keyframes), default=0.0)
+
     # --- dragging things in the view -------------------------------------------------------
 
     def light_markers(self) -> list[tuple[int, float, float]]:
@@ -390,6 +455,8 @@ class Viewer:
         near = [item for item in near if item[0] <= MARKER_RADIUS]
         if near:
             path = f"lights.{min(near)[1]}.position"
+        elif shift and self.selection is not None and self.selection[0] == "mesh":
+            path = f"meshes[{self.selection[1]}].position"
         elif shift and self.selection is not None and len(self.selection) == 1:
             path = f"objects[{self.selection[0]}].position"
         elif self.grab_ball(x, y):
@@ -477,14 +544,23 @@ class Viewer:
         """March one pixel of the full-resolution view on the reference (`marchlab.probe`);
         (x, y) in view pixels, row 0 at the top."""
         from .probe import probe
+        if self.history.scene.meshes:
+            raise MarchlabError("probing a march needs a scene of SDF objects: a scene of "
+                                "triangle meshes is rasterised, not marched")
         width, height = self.size
         self.probe = probe(self.scene_now(), int(x), int(y), width, height)
         self.probe_at = (int(x), int(y))
 
     def scene_now(self) -> Scene:
-        """The edited scene with the view's camera and the bodies where the physics has
-        them (what the probe and the reference check look at)."""
+        """The edited scene with the view's camera, its keyframed fields at the animation's
+        time once its clock has started (`scene_model.timeline.scene_at_time`; the view's
+        camera stays the person's: a camera orbit or keyed camera field is not applied) and
+        the bodies where the physics has them (what the probe and the reference check look
+        at)."""
         scene = self.scene
+        if scene.keyframes and self.animation_time is not None:
+            still = scene_at_time(dataclasses.replace(scene, orbit=None), self.animation_time)
+            scene = dataclasses.replace(still, camera=self.camera)
         if self.playback is not None:
             from .simulation import body_rotations
             world = self.playback.world
@@ -595,7 +671,32 @@ def _is_bundled(path: Path) -> bool:
     return path.parent.name == "scenes" and path.parent.parent.name == "scene_model"
 
 
+def _mesh_count(node) -> int:
+    """How many meshes (object ids) a mesh node and its children make (`scene_meshes`)."""
+    from scene_model.mesh_world import node_parts
+    return len(node_parts(node)) + sum(_mesh_count(child) for child in node.children)
+
+
+def mesh_ids(scene: Scene, index: int) -> tuple[int, ...]:
+    """The object ids of top-level mesh node ``index``: its parts' and its children's, as
+    `scene_model.mesh_world.scene_meshes` numbers them (depth first)."""
+    first = sum(_mesh_count(node) for node in scene.meshes[:index])
+    return tuple(range(first, first + _mesh_count(scene.meshes[index])))
+
+
+def mesh_holding(scene: Scene, object_id: int) -> int | None:
+    """The top-level mesh node that object id ``object_id`` is part of (None: a miss)."""
+    first = 0
+    for index, node in enumerate(scene.meshes):
+        first += _mesh_count(node)
+        if 0 <= object_id < first:
+            return index
+    return None
+
+
 def _exists(scene: Scene, path) -> bool:
+    if path[0] == "mesh":
+        return path[1] < len(scene.meshes)
     try:
         editing.node_at(scene, path)
     except (SceneError, IndexError, KeyError):

@@ -6,7 +6,10 @@ gpu backend's `Renderer` into its three planes and shown by the display pass
 (`gpu_shader.display`) as the window's background, and the panels are ImGui windows over it.
 The state is a `marchlab.view.Viewer`; this module draws it and forwards input to it.
 
-`ViewDrawer` is the GL half (no ImGui), so it can be checked on a headless context too.
+`ViewDrawer` is the GL half (no ImGui), so it can be checked on a headless context too;
+`MeshDrawer` is its twin for a scene of triangle meshes (the raster backend's
+`MeshRenderer`, its planes turned into the display pass's by `gpu_shader.raster_display`).
+The window picks the one for the viewer's scene each frame (`Window.choose_drawer`).
 """
 
 from __future__ import annotations
@@ -32,7 +35,54 @@ from .view import MARKER_RADIUS, MOVING_SCALES, OVERLAYS, TARGET_FPS, Viewer, ve
 DIFFERENCE_GAIN = 32
 
 
-class ViewDrawer:
+class _ShownPlanes:
+    """What the two drawers share: the three display planes in `target` (those of
+    `gpu_shader.planes`, drawn at the size in `drawn`) shown by the display pass, read
+    back, written to a file, picked from."""
+
+    def show(self, viewer: Viewer, viewport) -> None:
+        """Draw the picture into the bound framebuffer's ``viewport`` (x, y, w, h)."""
+        if self.target is None:
+            return
+        scene = viewer.history.scene
+        self.display.draw(self.target, viewer.overlay, gamma=scene.render.gamma,
+                          max_steps=pixel_max_steps(scene.render.max_steps,
+                                                    scene.render.samples),
+                          depth_range=self.depth,
+                          selected=viewer.selected_ids(), viewport=viewport)
+
+    def image(self, viewer: Viewer) -> np.ndarray:
+        """The view at full resolution as an (H, W, 3) uint8 picture (no panels, no
+        outline), drawn now if the view shows a reduced one: what `screenshot` writes."""
+        refine, viewer.refine = viewer.refine, False
+        try:
+            self.update(viewer, wait=True)
+        finally:
+            viewer.refine = refine
+        return self.shown_image(viewer, outline=False)
+
+    def screenshot(self, viewer: Viewer, path) -> Path:
+        """Write the 3D view alone, at full resolution, to a PNG."""
+        from PIL import Image
+        import io
+        buffer = io.BytesIO()
+        Image.fromarray(self.image(viewer)).save(buffer, format="PNG")
+        write_atomically(path, buffer.getvalue())
+        viewer.status = f"saved {path}"
+        return Path(path)
+
+    def object_id_at(self, viewer: Viewer, x: float, y: float) -> int:
+        """The object id under view pixel (x, y) (-1: a miss), from the drawn picture."""
+        if self.target is None:
+            return -1
+        i, j = viewer.texel_at(x, y, *self.drawn[1])
+        with self.ctx:
+            data = self.target.read(viewport=(i, j, 1, 1), components=4, attachment=2,
+                                    dtype="i4")
+        return int(np.frombuffer(data, np.int32)[1])
+
+
+class ViewDrawer(_ShownPlanes):
     """Draws a `Viewer`'s scene with the gpu backend on ``ctx`` and shows it.
 
     The view renders only when what it shows changed, on the thread that owns the context.
@@ -114,27 +164,6 @@ class ViewDrawer:
             self.depth = self.display.read_depth_range(self.target)
         self.render_seconds = time.perf_counter() - start
 
-    def show(self, viewer: Viewer, viewport) -> None:
-        """Draw the picture into the bound framebuffer's ``viewport`` (x, y, w, h)."""
-        if self.target is None:
-            return
-        scene = viewer.history.scene
-        self.display.draw(self.target, viewer.overlay, gamma=scene.render.gamma,
-                          max_steps=pixel_max_steps(scene.render.max_steps,
-                                                    scene.render.samples),
-                          depth_range=self.depth,
-                          selected=viewer.selected_ids(), viewport=viewport)
-
-    def image(self, viewer: Viewer) -> np.ndarray:
-        """The view at full resolution as an (H, W, 3) uint8 picture (no panels, no
-        outline), drawn now if the view shows a reduced one: what `screenshot` writes."""
-        refine, viewer.refine = viewer.refine, False
-        try:
-            self.update(viewer, wait=True)
-        finally:
-            viewer.refine = refine
-        return self.shown_image(viewer, outline=False)
-
     def shown_image(self, viewer: Viewer, outline: bool = True) -> np.ndarray:
         """The picture drawn last (at the resolution it was drawn at), read back and encoded
         as `marchlab render` encodes a frame (`gpu_shader.display.overlay_image`), with the
@@ -145,31 +174,96 @@ class ViewDrawer:
             frame = self.renderer.read_frame(self.target, scene, width, height)
         return overlay_image(frame, viewer.overlay, viewer.selected_ids() if outline else ())
 
-    def screenshot(self, viewer: Viewer, path) -> Path:
-        """Write the 3D view alone, at full resolution, to a PNG."""
-        from PIL import Image
-        import io
-        buffer = io.BytesIO()
-        Image.fromarray(self.image(viewer)).save(buffer, format="PNG")
-        write_atomically(path, buffer.getvalue())
-        viewer.status = f"saved {path}"
-        return Path(path)
-
-    def object_id_at(self, viewer: Viewer, x: float, y: float) -> int:
-        """The object id under view pixel (x, y) (-1: a miss), from the drawn picture."""
-        if self.target is None:
-            return -1
-        i, j = viewer.texel_at(x, y, *self.drawn[1])
-        with self.ctx:
-            data = self.target.read(viewport=(i, j, 1, 1), components=4, attachment=2,
-                                    dtype="i4")
-        return int(np.frombuffer(data, np.int32)[1])
-
     def frame(self, viewer: Viewer):
         """The gpu backend's `Frame` of the view as it draws at rest (the resolution scale
         applied), with path labels: what the check against the reference compares."""
         return self.renderer.render(viewer.drawn_scene(), *viewer.rest_size(),
                                     path_labels=True)
+
+
+class MeshDrawer(_ShownPlanes):
+    """Draws a `Viewer`'s scene of triangle meshes with the raster backend on ``ctx`` and
+    shows it with the same display pass as `ViewDrawer`.
+
+    One `gpu_shader.raster_render.MeshRenderer` holds the meshes on the GPU; it is made
+    again only when the scene's meshes or materials change (an edit, or a keyframed
+    transform, which moves the world's triangles), not when the camera, a light or a render
+    setting does. Each frame its planes become the display pass's three
+    (`gpu_shader.raster_display`): the overlays, gamma and the selection's outline work as
+    they do for a sphere-traced scene; the steps overlay shows zeros (nothing is marched).
+    """
+
+    def __init__(self, ctx, display=None):
+        from gpu_shader.display import Display
+        from gpu_shader.raster_display import RasterDisplayPlanes
+        self.ctx = ctx
+        self.display = display or Display(ctx)
+        self.planes = RasterDisplayPlanes(ctx)
+        self.renderer = None              # the MeshRenderer, made for `_made_for`
+        self._made_for = None             # (meshes, materials)
+        self.compiler = None              # nothing compiles in the background here
+        self.compiling = False
+        self.drawn = None                 # (scene, size) of the picture in `target`
+        self.target = None                # the display planes' framebuffer
+        self.depth = (0.0, 1.0)
+        self.renders = 0
+        self.render_seconds = 0.0
+
+    def update(self, viewer: Viewer, wait: bool = False) -> bool:
+        """Draw the view again if what it shows changed; whether a new picture is drawn.
+        (``wait`` is `ViewDrawer.update`'s: a mesh scene never waits for a compiler.)"""
+        scene, size = viewer.drawn_scene(), viewer.render_size()
+        if self.drawn is not None and self.drawn == (scene, size):
+            return False
+        start = time.perf_counter()
+        try:
+            fbo = self._renderer(scene).draw(scene, *size)
+            self.target = self.planes.convert(fbo, *size)
+        except MarchlabError as err:
+            viewer.status = f"cannot draw: {err}"
+        self.drawn = (scene, size)
+        self.renders += 1
+        if viewer.overlay == "depth" and self.target is not None:
+            self.depth = self.display.read_depth_range(self.target)
+        self.render_seconds = time.perf_counter() - start
+        return True
+
+    def _renderer(self, scene):
+        """The MeshRenderer for ``scene``'s meshes and materials (made again if they
+        changed); a scene the raster backend refuses raises MarchlabError, saying why."""
+        from gpu_shader.raster_render import MeshRenderer
+        from reference_cpu.raster_render import check_mesh_scene
+        check_mesh_scene(scene, "raster")          # a render setting may have been edited
+        made_for = (scene.meshes, scene.materials)
+        if self.renderer is None or self._made_for != made_for:
+            if self.renderer is not None:
+                self.renderer.release()
+                self.renderer = None
+            self.renderer = MeshRenderer(scene, self.ctx)
+            self._made_for = made_for
+        return self.renderer
+
+    def shown_image(self, viewer: Viewer, outline: bool = True) -> np.ndarray:
+        """The picture drawn last, read back and encoded as `marchlab render --backend
+        raster` encodes its frame (`gpu_shader.display.overlay_image`), with the selection's
+        outline if ``outline``."""
+        from gpu_shader.display import overlay_image
+        from gpu_shader.planes import frame_from_planes
+        scene = self.drawn[0]
+        frame = frame_from_planes(self.planes.read(self.target), scene, "raster", "float32")
+        return overlay_image(frame, viewer.overlay, viewer.selected_ids() if outline else ())
+
+    def frame(self, viewer: Viewer):
+        """The raster backend's `Frame` of the view as it draws at rest, with path labels
+        (`MeshRenderer.frame`): what the check against the reference compares."""
+        scene = viewer.drawn_scene()
+        return self._renderer(scene).frame(scene, *viewer.rest_size())
+
+    def release(self) -> None:
+        if self.renderer is not None:
+            self.renderer.release()
+            self.renderer = None
+        self.planes.release()
 
 
 class Window:
@@ -182,7 +276,9 @@ class Window:
         self.screenshot_path = screenshot
         self.actions = list(actions)
         self.panels = panels
-        self.drawer: ViewDrawer | None = None
+        self.drawer: ViewDrawer | MeshDrawer | None = None
+        self.drawers: dict[str, ViewDrawer | MeshDrawer] = {}   # made on the first use
+        self.ctx = None
         self.error: BaseException | None = None
         self.frame_count = 0
         self.last_time = None
@@ -213,13 +309,30 @@ class Window:
             ctx = moderngl.create_context()
             if ctx.version_code < 330:
                 raise MarchlabError(f"OpenGL {ctx.version_code / 100:.1f}: the view needs 3.3")
-            self.drawer = ViewDrawer(ctx, compiler=background_compiler())
+            self.ctx = ctx
+            self.choose_drawer()
         except BaseException as err:     # reported after the loop, which must end cleanly
             self._fail(err)
 
+    def choose_drawer(self):
+        """The drawer for the viewer's scene, made on first use: `MeshDrawer` for a scene of
+        triangle meshes, `ViewDrawer` (the sphere tracer) for one of SDF objects. Called
+        each frame, so that opening or reloading another kind of scene switches it."""
+        kind = "mesh" if self.viewer.history.scene.meshes else "sdf"
+        if kind not in self.drawers:
+            if kind == "mesh":
+                self.drawers[kind] = MeshDrawer(self.ctx)
+            else:
+                self.drawers[kind] = ViewDrawer(self.ctx, compiler=background_compiler())
+        if self.drawer is not self.drawers[kind]:
+            self.drawer = self.drawers[kind]
+            self.drawer.drawn = None          # draw the scene now shown, whatever it was
+        return self.drawer
+
     def before_exit(self) -> None:
-        if self.drawer is not None and self.drawer.compiler is not None:
-            self.drawer.compiler.close()
+        for drawer in self.drawers.values():
+            if drawer.compiler is not None:
+                drawer.compiler.close()
 
     def background(self) -> None:
         if self.drawer is None:
@@ -237,11 +350,13 @@ class Window:
                 self.viewer.reload_if_changed()
             while self.requests:
                 self.requests.pop(0)()
+            self.choose_drawer()
             if self.turntable is not None:
                 self._turn()
             elif self.actions:
                 from .view_script import perform
                 perform(self.actions.pop(0), self.viewer, _Gl(self))
+            self.choose_drawer()
             io = imgui.get_io()
             width, height = (int(v) for v in io.display_size)
             scale = io.display_framebuffer_scale
@@ -273,6 +388,7 @@ class Window:
         if self.drawer is None:
             return
         try:
+            self.choose_drawer()
             self._input()
             if self.panels:
                 self._panels()
@@ -346,9 +462,8 @@ class Window:
                 viewer.redo() if io.key_shift else viewer.undo()
             if io.key_ctrl and imgui.is_key_pressed(imgui.Key.s):
                 self._save()
-            if imgui.is_key_pressed(imgui.Key.space) and viewer.playback is not None:
-                playback = viewer.playback
-                playback.pause() if playback.playing else playback.play()
+            if imgui.is_key_pressed(imgui.Key.space):
+                viewer.toggle_play()
             if imgui.is_key_pressed(imgui.Key.delete):
                 viewer.delete_selected()
             if imgui.is_key_pressed(imgui.Key.tab):
@@ -359,7 +474,7 @@ class Window:
 
     def _click(self, x, y) -> None:
         viewer = self.viewer
-        if getattr(self, "probe_mode", False):
+        if getattr(self, "probe_mode", False) and not viewer.history.scene.meshes:
             try:
                 viewer.probe_pixel(int(x), int(y))
             except MarchlabError as err:
@@ -382,6 +497,8 @@ class Window:
         self._panel("Render", self._render_panel, (right, 30), (310, 420))
         if self.viewer.playback is not None:
             self._panel("Physics", self._physics_panel, (right, 460), (310, 260))
+        elif self.viewer.animated:
+            self._panel("Animation", self._animation_panel, (right, 460), (310, 110))
         self._panel("Performance", self._performance_panel, (10, 500), (330, 170))
         if self.viewer.probe is not None:
             self._panel("Probe", self._probe_panel)
@@ -478,7 +595,29 @@ class Window:
         from imgui_bundle import imgui
         viewer = self.viewer
         scene = viewer.history.scene
-        # The object tools sit above the tabs, where the test engine finds them by label.
+        if scene.meshes:
+            imgui.text_disabled("triangle meshes: no SDF objects to add here")
+        else:
+            self._object_tools()
+        if imgui.begin_tab_bar("scene tabs"):
+            if scene.meshes and imgui.begin_tab_item("Meshes")[0]:
+                self._meshes_tab(scene)
+                imgui.end_tab_item()
+            if not scene.meshes and imgui.begin_tab_item("Objects")[0]:
+                for i, node in enumerate(scene.objects):
+                    self._tree(node, (i,))
+                if viewer.selection is not None:
+                    imgui.separator()
+                    self._node_editor(viewer.selection)
+                imgui.end_tab_item()
+            self._shared_tabs(scene)
+            imgui.end_tab_bar()
+
+    def _object_tools(self) -> None:
+        """Add, duplicate and delete SDF objects (they sit above the tabs, where the test
+        engine finds them by label)."""
+        from imgui_bundle import imgui
+        viewer = self.viewer
         kinds = list(node_kinds())
         imgui.set_next_item_width(110)
         changed, index = imgui.combo("new", kinds.index(self.add_kind), kinds)
@@ -492,48 +631,79 @@ class Window:
         imgui.same_line()
         if imgui.button("Delete") and viewer.selection:
             self._guarded(viewer.delete_selected)
-        if imgui.begin_tab_bar("scene tabs"):
-            if imgui.begin_tab_item("Objects")[0]:
-                for i, node in enumerate(scene.objects):
-                    self._tree(node, (i,))
-                if viewer.selection is not None:
-                    imgui.separator()
-                    self._node_editor(viewer.selection)
-                imgui.end_tab_item()
-            if imgui.begin_tab_item("Materials")[0]:
-                if imgui.button("Add material"):
-                    new, name = editing.add_material(scene)
-                    viewer.edit(new, f"add material {name}")
-                for name, material in scene.materials.items():
-                    if imgui.tree_node(f"{name}##material"):
-                        self._record(material, f"materials.{name}")
-                        imgui.tree_pop()
-                imgui.end_tab_item()
-            if imgui.begin_tab_item("Lights")[0]:
-                for kind in ("point", "directional", "spot"):
-                    if imgui.button(f"Add {kind}"):
-                        new, _ = editing.add_light(scene, kind)
-                        viewer.edit(new, f"add {kind} light")
-                    imgui.same_line()
-                imgui.new_line()
-                for i, light in enumerate(scene.lights):
-                    opened = imgui.tree_node(f"{i}: {light.kind}##light{i}")
-                    imgui.same_line()
-                    if imgui.small_button(f"delete##light{i}"):
-                        viewer.edit(editing.delete_light(scene, i), f"delete light {i}")
-                        if opened:
-                            imgui.tree_pop()
-                        break
+
+    def _meshes_tab(self, scene) -> None:
+        """The top-level mesh nodes (click to select; a click in the view selects too) and
+        the selected one's fields: position, rotation, scale, material, its own numbers."""
+        from imgui_bundle import imgui
+        viewer = self.viewer
+        imgui.text_disabled("add or remove meshes in the scene file ([[meshes]])")
+        for i, node in enumerate(scene.meshes):
+            label = node.kind + (f" ({node.material})" if getattr(node, "material", None)
+                                 else "")
+            if imgui.selectable(f"{label}##mesh{i}", viewer.selection == ("mesh", i))[0]:
+                viewer.select(("mesh", i))
+        if viewer.selection is not None and viewer.selection[0] == "mesh" \
+                and viewer.selection[1] < len(scene.meshes):
+            imgui.separator()
+            i = viewer.selection[1]
+            self._record(scene.meshes[i], f"meshes[{i}]")
+
+    def _shared_tabs(self, scene) -> None:
+        """The tabs every scene has: materials, lights, camera."""
+        from imgui_bundle import imgui
+        viewer = self.viewer
+        if imgui.begin_tab_item("Materials")[0]:
+            if imgui.button("Add material"):
+                new, name = editing.add_material(scene)
+                viewer.edit(new, f"add material {name}")
+            for name, material in scene.materials.items():
+                if imgui.tree_node(f"{name}##material"):
+                    self._record(material, f"materials.{name}")
+                    imgui.tree_pop()
+            imgui.end_tab_item()
+        if imgui.begin_tab_item("Lights")[0]:
+            for kind in ("point", "directional", "spot"):
+                if imgui.button(f"Add {kind}"):
+                    new, _ = editing.add_light(scene, kind)
+                    viewer.edit(new, f"add {kind} light")
+                imgui.same_line()
+            imgui.new_line()
+            for i, light in enumerate(scene.lights):
+                opened = imgui.tree_node(f"{i}: {light.kind}##light{i}")
+                imgui.same_line()
+                if imgui.small_button(f"delete##light{i}"):
+                    viewer.edit(editing.delete_light(scene, i), f"delete light {i}")
                     if opened:
-                        self._record(light, f"lights.{i}")
                         imgui.tree_pop()
-                imgui.end_tab_item()
-            if imgui.begin_tab_item("Camera")[0]:
-                self._record(viewer.camera, "camera")
-                if imgui.button("Reset camera"):
-                    viewer.reset_camera()
-                imgui.end_tab_item()
-            imgui.end_tab_bar()
+                    break
+                if opened:
+                    self._record(light, f"lights.{i}")
+                    imgui.tree_pop()
+            imgui.end_tab_item()
+        if imgui.begin_tab_item("Camera")[0]:
+            self._record(viewer.camera, "camera")
+            if imgui.button("Reset camera"):
+                viewer.reset_camera()
+            imgui.end_tab_item()
+
+    def _animation_panel(self) -> None:
+        """Play, pause and rewind the scene's keyframes (the scene as written until played,
+        as `marchlab render` draws it), and the time as a slider."""
+        from imgui_bundle import imgui
+        viewer = self.viewer
+        if imgui.button("Pause##animation" if viewer.animating else "Play##animation"):
+            viewer.play_animation(not viewer.animating)
+        imgui.same_line()
+        if imgui.button("Rewind##animation"):
+            viewer.rewind_animation()
+        length = max(viewer.animation_length(), 1e-3)
+        now = viewer.animation_time
+        shown = 0.0 if now is None else now % length
+        changed, seconds = imgui.slider_float("time (s)##animation", shown, 0.0, length)
+        if changed:
+            viewer.set_animation_time(seconds)
+        imgui.text_disabled("as written" if now is None else f"t = {now:.2f} s")
 
     def _guarded(self, function, *args) -> None:
         try:
@@ -651,8 +821,11 @@ class Window:
         if changed:
             viewer.overlay = OVERLAYS[index]
             self.drawer.drawn = None      # the depth overlay reads its range when drawn
-        _, self.probe_mode = imgui.checkbox("probe a pixel on click",
-                                            getattr(self, "probe_mode", False))
+        if viewer.history.scene.meshes:
+            imgui.text_disabled("meshes are rasterised: no march to probe, no steps")
+        else:
+            _, self.probe_mode = imgui.checkbox("probe a pixel on click",
+                                                getattr(self, "probe_mode", False))
         if imgui.button("Check against the reference") and viewer.check_progress is None:
             viewer.check_against_reference(self.drawer.frame(viewer))
         imgui.separator()
@@ -742,7 +915,9 @@ class Window:
             imgui.progress_bar(done / max(total, 1), (-1, 0), viewer.check_stage)
             return
         check = viewer.check
-        imgui.text_wrapped(f"gpu: {verdict(check.failures)} ({check.seconds:.1f} s)")
+        drawn_by = "raster" if check.reference_backend == "numpy-raster" else "gpu"
+        imgui.text_wrapped(f"{drawn_by} against {check.reference_backend}: "
+                           f"{verdict(check.failures)} ({check.seconds:.1f} s)")
         if check.opencl_failures is not None:
             imgui.text_wrapped(f"OpenCL: {verdict(check.opencl_failures)}")
         size = (check.reference.shape[1] / 2, check.reference.shape[0] / 2)
@@ -806,11 +981,12 @@ class _Gl:
         self.window = window
 
     def object_id_at(self, x, y) -> int:
+        self.window.choose_drawer()
         self.window.drawer.update(self.window.viewer, wait=True)   # pick what the scene has
         return self.window.drawer.object_id_at(self.window.viewer, x, y)
 
     def screenshot(self, path) -> None:
-        self.window.drawer.screenshot(self.window.viewer, path)
+        self.window.choose_drawer().screenshot(self.window.viewer, path)
 
     def turntable(self, path, frames: int) -> None:
         self.window.start_turntable(path, frames)

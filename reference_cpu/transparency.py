@@ -18,7 +18,8 @@ rasteriser needs one of two ways to composite several transparent surfaces on a 
   Transparency", NVIDIA): each pass rasterises the transparent triangles again and keeps, on
   each pixel, the nearest fragment *farther* than the previous pass kept (and nearer than the
   opaque depth). Pass k peels the k-th surface along every pixel's ray, whatever the order
-  the triangles come in; they are composited front to back (C += T alpha c, T *= 1 - alpha,
+  the triangles come in; they are composited front to back (``C += T alpha c``,
+  ``T *= 1 - alpha``,
   the "under" form of Porter and Duff's operator that Bavoil and Myers 2008 use for peeling),
   the opaque picture last. It is exact with as many passes as the deepest pixel has
   surfaces; fewer passes drop the farthest ones. Two fragments at exactly one depth on a

@@ -55,7 +55,7 @@ def scene_meshes(scene, folder=None) -> tuple[list[TriangleMesh], list]:
     Parameters
     ----------
     scene : Scene
-    folder : path, optional
+    folder : str or os.PathLike, optional
         Where relative OBJ file names start (a loaded scene's are already resolved against
         its file's folder, `scene_model.scenefile.with_files_from`).
 

@@ -11,7 +11,7 @@ depth buffer) a ray caster gets by following rays (Whitted 1980):
   itself), and the ray starts on the mirror, so nothing behind it can show.
 - **Transparency** (`ordered_composite`): every surface along each pixel's ray, found by
   casting again from just past each hit, sorted by distance and composited front to back with
-  opacity alpha = 1 - transparency: C += T alpha c, T *= 1 - alpha (Porter and Duff 1984's
+  opacity alpha = 1 - transparency: ``C += T alpha c``, ``T *= 1 - alpha`` (Porter and Duff 1984's
   "over", accumulated from the front), the background last. No refraction: the rays go
   straight through, as the raster pipeline's blending assumes (not the sphere tracer's glass).
 
