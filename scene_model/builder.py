@@ -12,6 +12,15 @@
 Each function returns a node of `scene_model.shapes`; the node's methods ``at``, ``rotate``,
 ``scale``, ``repeat``, ``smooth_union``..., ``morph`` (``a.morph(b, t)``: a turning into b as t
 goes from 0 to 1) and the operators ``|``, ``&``, ``-`` combine them.
+
+Triangle meshes (`scene_model.mesh_objects`, drawn by the raster backends) are built the same
+way, by the functions ending in ``_mesh`` and by ``group``; a mesh node's ``at``, ``rotate``
+and ``scaled`` set its own transform (always T R S: scale, then turn, then move), and
+``holding`` places children in its frame::
+
+    mobile = group(cylinder_mesh(0.015, 1.4).rotate(0, 0, 90),
+                   uv_sphere_mesh(0.16, material="blue").at(-0.7, -0.25, 0)).at(0, 3, 0)
+    scene = Scene(meshes=[plane_mesh(6, 6, subdivisions=4), mobile], ...)
 """
 
 from __future__ import annotations
@@ -24,12 +33,16 @@ from .scene import (Camera, Checker, CubeMapBackground, DirectionalLight, Equire
                     SpotLight, StudioBackground, Texture)
 from .shapes import (Box, CappedCylinder, Capsule, Cone, Disk, HexPrism, Node, Plane, Pyramid,
                      RoundBox, Sphere, Torus)
+from .mesh_objects import (ConeMesh, CubeMesh, CubeSphereMesh, CylinderMesh, DiskMesh, MeshGroup,
+                           MeshObject, ObjMesh, PlaneMesh, PyramidMesh, TorusMesh, UvSphereMesh)
 
 __all__ = ["sphere", "box", "round_box", "plane", "torus", "capped_cylinder", "capsule", "cone",
            "pyramid", "disk", "hex_prism", "union", "intersection", "Scene", "Camera",
            "RenderSettings", "Material", "Checker", "PointLight", "DirectionalLight", "SpotLight",
            "Fog", "SkyBackground", "SolidBackground", "CubeMapBackground", "EquirectBackground",
-           "StudioBackground", "Texture", "Body", "PhysicsSettings"]
+           "StudioBackground", "Texture", "Body", "PhysicsSettings", "plane_mesh", "cube_mesh",
+           "cube_sphere_mesh", "uv_sphere_mesh", "disk_mesh", "cylinder_mesh", "cone_mesh",
+           "pyramid_mesh", "torus_mesh", "obj_mesh", "group"]
 
 
 def _half_size(x, y, z):
@@ -107,3 +120,69 @@ def union(*nodes: Node) -> Node:
 def intersection(*nodes: Node) -> Node:
     """Where all the nodes overlap."""
     return reduce(lambda a, b: a & b, nodes)
+
+
+# --- Triangle meshes ----------------------------------------------------------------------------
+
+def plane_mesh(width: float = 1.0, depth: float = 1.0, subdivisions: int = 1,
+               material: str = "default") -> PlaneMesh:
+    """A width x depth rectangle in the xz-plane facing +y, cut into subdivisions^2 cells."""
+    return PlaneMesh(width=width, depth=depth, subdivisions=subdivisions, material=material)
+
+
+def cube_mesh(size: float = 1.0, subdivisions: int = 1, material: str = "default") -> CubeMesh:
+    """A cube of edge ``size`` centred on the origin."""
+    return CubeMesh(size=size, subdivisions=subdivisions, material=material)
+
+
+def cube_sphere_mesh(radius: float = 1.0, subdivisions: int = 8,
+                     material: str = "default") -> CubeSphereMesh:
+    """A sphere made from a subdivided cube pushed out to ``radius``."""
+    return CubeSphereMesh(radius=radius, subdivisions=subdivisions, material=material)
+
+
+def uv_sphere_mesh(radius: float = 1.0, segments: int = 32, rings: int = 16,
+                   material: str = "default") -> UvSphereMesh:
+    """A sphere of longitude segments and latitude rings."""
+    return UvSphereMesh(radius=radius, segments=segments, rings=rings, material=material)
+
+
+def disk_mesh(radius: float = 1.0, segments: int = 32, material: str = "default") -> DiskMesh:
+    """A flat disk in the xz-plane facing +y."""
+    return DiskMesh(radius=radius, segments=segments, material=material)
+
+
+def cylinder_mesh(radius: float = 0.5, height: float = 1.0, segments: int = 32,
+                  material: str = "default") -> CylinderMesh:
+    """A closed cylinder around the y axis, from y = -height/2 to height/2."""
+    return CylinderMesh(radius=radius, height=height, segments=segments, material=material)
+
+
+def cone_mesh(radius: float = 0.5, height: float = 1.0, segments: int = 32,
+              material: str = "default") -> ConeMesh:
+    """A closed cone around the y axis, its base at y = 0."""
+    return ConeMesh(radius=radius, height=height, segments=segments, material=material)
+
+
+def pyramid_mesh(base: float = 1.0, height: float = 1.0,
+                 material: str = "default") -> PyramidMesh:
+    """A square pyramid, its base at y = 0."""
+    return PyramidMesh(base=base, height=height, material=material)
+
+
+def torus_mesh(major: float = 1.0, minor: float = 0.25, segments: int = 32, sides: int = 16,
+               material: str = "default") -> TorusMesh:
+    """A ring around the y axis."""
+    return TorusMesh(major=major, minor=minor, segments=segments, sides=sides,
+                     material=material)
+
+
+def obj_mesh(file: str, material: str | None = None) -> ObjMesh:
+    """An OBJ model (its MTL colours unless ``material`` names one of the scene's)."""
+    return ObjMesh(file=file, material=material)
+
+
+def group(*children: MeshObject) -> MeshGroup:
+    """A frame holding ``children``: move, turn or scale it and they follow."""
+    return MeshGroup(children=tuple(children))
+

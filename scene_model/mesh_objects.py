@@ -57,6 +57,25 @@ class MeshObject(Record):
             raise SceneError(f"groups nested deeper than the limit of {MAX_MESH_DEPTH} levels",
                              ("children",))
 
+    # The builder's operators (`scene_model.builder`). A node's own transform is always
+    # T R S, whatever order these are called in: scale, then turn, then move.
+    def at(self, x: float, y: float, z: float) -> MeshObject:
+        """This node moved to (x, y, z) in its parent's frame."""
+        return dataclasses.replace(self, position=(x, y, z))
+
+    def rotate(self, x: float = 0.0, y: float = 0.0, z: float = 0.0) -> MeshObject:
+        """This node turned by Euler angles in degrees (about x, then y, then z)."""
+        return dataclasses.replace(self, rotation=(x, y, z))
+
+    def scaled(self, x: float, y: float | None = None, z: float | None = None) -> MeshObject:
+        """This node scaled along its own axes (one number: all three)."""
+        return dataclasses.replace(self, scale=(x, x, x) if y is None and z is None
+                                   else (x, y, z))
+
+    def holding(self, *children: MeshObject) -> MeshObject:
+        """This node with ``children`` added, placed in its frame."""
+        return dataclasses.replace(self, children=self.children + tuple(children))
+
 
 def mesh_depth(node: MeshObject) -> int:
     """Levels of the hierarchy under ``node``, itself included."""

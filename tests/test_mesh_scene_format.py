@@ -153,3 +153,16 @@ def test_mesh_frames_without_meshes_drawn_are_background(tmp_path):
                                                            look_at=(0.3, 10.0, 40.0)))
     frame = render(scene, 16, 12, backend="numpy-raster")
     assert not frame.hit.any() and np.all(np.isinf(frame.depth))
+
+
+def test_the_builder_makes_the_mobile_the_museum_file_describes():
+    from scene_model.builder import cone_mesh, cube_mesh, cylinder_mesh, group, uv_sphere_mesh
+    lower = group(cylinder_mesh(0.012, 0.8, material="frame").rotate(0, 0, 90),
+                  cone_mesh(0.12, 0.3, 24, material="red").at(-0.4, -0.35, 0),
+                  cube_mesh(0.18, material="jade").at(0.4, -0.25, 0).rotate(0, 45, 0))
+    mobile = group(cylinder_mesh(0.015, 1.4, material="frame").rotate(0, 0, 90),
+                   uv_sphere_mesh(0.16, 24, 12, material="blue").at(-0.7, -0.25, 0),
+                   lower.at(0.7, -0.3, 0)).at(0.6, 3.1, 0.6)
+    assert mobile == load_scene("museum").meshes[7]
+    assert cube_mesh().scaled(2).scale == (2.0, 2.0, 2.0)
+    assert group().holding(cube_mesh()).children == (cube_mesh(),)
