@@ -24,12 +24,14 @@ import numpy as np
 import pytest
 
 from marchlab import render
-from marchlab.render import BACKENDS
+from marchlab.render import BACKENDS, MESH_BACKENDS
 from required_backends import need_backend
 from scene_model.frame import Frame
 
+# The sphere tracers: the hard cases are SDF scenes (the mesh backends have their own, in
+# tests/equivalence/test_raster_equivalence.py and the rasteriser's tests).
 RENDERERS = [(name, precision) for name, backend in BACKENDS.items()
-             for precision in backend.precisions]
+             if name not in MESH_BACKENDS for precision in backend.precisions]
 
 
 @dataclass(frozen=True)
