@@ -43,7 +43,8 @@ from scene_model.scene import LIT_SHADING, Scene
 from .context import gl_context
 from .library import glsl_file
 from .raster import _set_camera
-from .raster_lit import RasterRenderer, ShadowCount, _compile, read_planes
+from .raster_lit import RasterRenderer, read_planes
+from .raster_shaders import ShadowCount, _compile
 from .raster_shadow_map import shadow_map_textures
 from .raster_shadows import ShadowVolumes
 

@@ -1,4 +1,4 @@
-{# A template: gpu_shader/raster_lit.py (lit_shaders) fills it in (Jinja). The raster twin of #}
+{# A template: gpu_shader/raster_shaders.py (lit_shaders) fills it in (Jinja). The raster twin of #}
 {# glsl/pipeline/materials.glsl: the same material rows, and a mesh's own texture coordinates. #}
 {% if "uv" in mappings %}
 // A texture at a mesh's texture coordinates uv, repeated every `scale` in u and v: a mesh's

@@ -1,4 +1,4 @@
-{# A template: gpu_shader/raster_lit.py (lit_shaders) fills it in for one scene (Jinja). #}
+{# A template: gpu_shader/raster_shaders.py (lit_shaders) fills it in for one scene (Jinja). #}
 {% from "raster/view.glsl" import banner, camera %}
 {{ prelude }}
 // The raster pipeline's lit fragment shader, generated for one scene: the planes of the

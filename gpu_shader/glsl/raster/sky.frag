@@ -1,4 +1,4 @@
-{# A template: gpu_shader/raster_lit.py (lit_shaders) fills it in for one background (Jinja). #}
+{# A template: gpu_shader/raster_shaders.py (lit_shaders) fills it in for one background (Jinja). #}
 {% from "raster/view.glsl" import banner, camera %}
 {{ prelude }}
 // The raster pipeline's skybox: what a pixel that no triangle covers shows, the scene's
