@@ -51,7 +51,8 @@ def _make_context():
     chosen = os.environ.get(ENV_DEVICE, "").strip()
     if chosen:
         if not chosen.isdigit():
-            raise MarchlabError(f"{ENV_DEVICE}={chosen!r}: expected an EGL device index (0, 1, ...)")
+            raise MarchlabError(
+                f"{ENV_DEVICE}={chosen!r}: expected an EGL device index (0, 1, ...)")
         try:
             return _checked(_standalone(moderngl, int(chosen)))
         except MarchlabError:

@@ -382,7 +382,8 @@ def _opencl(real: str, dtype, packets: bool = False) -> Dialect:
     """OpenCL C over `real`: one ray per work-item, or one packet of rays (``packets``)."""
     return Dialect(
         name="opencl-packets" if packets else "opencl",
-        prelude=_opencl_packet_prelude(real) if packets else _opencl_prelude(real) + _OPENCL_VECTORS,
+        prelude=(_opencl_packet_prelude(real) if packets
+                 else _opencl_prelude(real) + _OPENCL_VECTORS),
         struct=_opencl_packet_struct if packets else _opencl_struct,
         to_int=lambda expr: f"(int)({expr})",
         declare_parameters=lambda rows, fixed, flat_rows: _OPENCL_PARAMETERS,

@@ -335,7 +335,8 @@ class _Generator:
         b.named({"CAMERA_FORWARD": ("xyz", forward)})
         b.named({"CAMERA_RIGHT": ("xyz", right)})
         b.named({"CAMERA_UP": ("xyz", up)})
-        b.named({"HALF_WIDTH": ("x", half_height * width / height), "HALF_HEIGHT": ("y", half_height),
+        b.named({"HALF_WIDTH": ("x", half_height * width / height),
+                 "HALF_HEIGHT": ("y", half_height),
                  "IMAGE_WIDTH": ("z", width), "IMAGE_HEIGHT": ("w", height)})
         b.named({"EPSILON": ("x", s.epsilon), "MAX_DISTANCE": ("y", s.max_distance),
                  "NORMAL_STEP": ("z", s.normal_step), "SURFACE_OFFSET": ("w", s.surface_offset)})
@@ -363,7 +364,8 @@ class _Generator:
             self.features.add(f"shadows:{self.s.shadows}")
         mode = self.s.relaxation
         if mode == "none":
-            return [(f"sphere tracing ({self.file('march')})", self.d.library("march").select(needs))]
+            return [(f"sphere tracing ({self.file('march')})",
+                     self.d.library("march").select(needs))]
         self.features.add(f"relaxation:{mode}")
         if mode == "fixed":
             self.block.named({"OMEGA": ("x", self.s.omega)})

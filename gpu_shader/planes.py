@@ -42,7 +42,8 @@ def frame_from_planes(planes, scene: Scene, backend: str, precision: str) -> Fra
                  hit=color_hit[..., 3] > 0.5, gamma=scene.render.gamma,
                  max_steps=pixel_max_steps(scene.render.max_steps, scene.render.samples),
                  dither=scene.render.dither,
-                 path=labels.view(np.uint32) if labels.dtype == np.int32 else labels.astype(np.uint32),
+                 path=(labels.view(np.uint32) if labels.dtype == np.int32
+                       else labels.astype(np.uint32)),
                  backend=backend, precision=precision)
 
 

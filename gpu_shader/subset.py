@@ -234,7 +234,8 @@ def _format(node: Node) -> tuple:
     if isinstance(node, Number):
         return node.text, POSTFIX
     if isinstance(node, Call):
-        return f"{node.function}({', '.join(format_expression(a) for a in node.arguments)})", POSTFIX
+        arguments = ', '.join(format_expression(a) for a in node.arguments)
+        return f"{node.function}({arguments})", POSTFIX
     if isinstance(node, Member):
         return f"{_operand(node.base, POSTFIX)}.{node.field}", POSTFIX
     if isinstance(node, Index):

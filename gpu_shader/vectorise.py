@@ -251,7 +251,8 @@ class _FunctionLowering(ExpressionLowering):
         mask = self.masks[-1][1]
         word = "break" if kind == "loop" else "continue"
         comment = (statements[0].comment or node.comment
-                   or f"// {word}: these lanes leave the {'loop' if kind == 'loop' else 'iteration'}")
+                   or f"// {word}: these lanes leave the "
+                      f"{'loop' if kind == 'loop' else 'iteration'}")
         return lambda taken: [Assign(Name(mask), "=", _and(mask, Unary("~", taken)),
                                      comment=comment)]
 

@@ -175,7 +175,8 @@ def keep_current(moderngl_module):
     """Make the process's context current again after a test that makes other contexts.
 
     Making a context makes it current, and the backend draws on whichever context is current
-    (see test_frames_are_unchanged_after_another_gl_context_is_made), so later tests would get empty frames.
+    (see test_frames_are_unchanged_after_another_gl_context_is_made), so later tests would get
+    empty frames.
     """
     original = context._context
     yield moderngl_module
@@ -330,7 +331,8 @@ def test_parameters_as_flat_varyings_or_a_private_copy_give_the_same_frame_to_th
     if rows > gpu_render._renderer().flat_rows:
         pytest.skip(f"this OpenGL passes {gpu_render._renderer().flat_rows} flat varyings, "
                     f"{scene_name} needs {rows}")
-    assert f"flat in vec4 P[{rows}];" in flat.source and f"#define FLAT_ROWS {rows}" in flat.vertex_source
+    assert f"flat in vec4 P[{rows}];" in flat.source
+    assert f"#define FLAT_ROWS {rows}" in flat.vertex_source
     assert f"vec4 P[{rows}];" in private.source and "flat in" not in private.source
     assert private.vertex_source == ""
     a = render_program(scene, flat, 48, 36)

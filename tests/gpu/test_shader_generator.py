@@ -215,7 +215,8 @@ def test_reassigning_a_material_changes_parameters_not_source():
 
 def test_adding_an_object_changes_source():
     scene = load_scene("classroom")
-    more = dataclasses.replace(scene, objects=scene.objects + (sphere(0.3, material="red").at(0, 2, 0),))
+    more = dataclasses.replace(
+        scene, objects=scene.objects + (sphere(0.3, material="red").at(0, 2, 0),))
     assert generate(more, WIDTH, HEIGHT).source != generate(scene, WIDTH, HEIGHT).source
 
 
@@ -250,7 +251,8 @@ def test_every_parameter_index_is_inside_the_declared_block(name):
     rows = int(re.search(r"^\s*vec4 U\[(\d+)\];", source, re.M).group(1))
     fixed = int(re.search(r"^(?:flat in )?vec4 P\[(\d+)\];", source, re.M).group(1))
     assert program.parameters.shape == (rows, 4)
-    body = re.sub(r"^\s*(?:flat in )?vec4 [PU]\[\d+\];$", "", source, flags=re.M)   # drop declarations
+    # drop declarations
+    body = re.sub(r"^\s*(?:flat in )?vec4 [PU]\[\d+\];$", "", source, flags=re.M)
     p_indices = [int(i) for i in re.findall(r"\bP\[(\d+)\]", body)]
     u_indices = [int(i) for i in re.findall(r"\bU\[(\d+)\]", body)]
     assert p_indices, "the camera rows, at least, are read through P"
