@@ -49,6 +49,19 @@ def _obj_parts(path: str, modified: float):
     return load_obj(path)
 
 
+def check_obj_files(nodes, path=("meshes",)) -> None:
+    """Read every OBJ file under ``nodes`` (kept for drawing), so that a missing or broken one
+    is reported when the scene is loaded, as the field that names it (``meshes[2].file``)."""
+    from .errors import SceneError
+    for index, node in enumerate(nodes):
+        if isinstance(node, ObjMesh):
+            try:
+                node_parts(node)
+            except SceneError as err:
+                raise SceneError(str(err), path + (index, "file")) from None
+        check_obj_files(node.children, path + (index, "children"))
+
+
 def scene_meshes(scene, folder=None) -> tuple[list[TriangleMesh], list]:
     """A scene's meshes in world coordinates, and the material of each.
 

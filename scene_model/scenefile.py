@@ -31,6 +31,7 @@ from .files import write_atomically
 from .nesting import deep_path, parse_toml
 from .scene import Background, Light, Scene
 from .mesh_objects import MeshObject, mesh_kinds, relative_to
+from .mesh_world import check_obj_files
 from .shapes import TOO_DEEP, Node, Rotate, Scale, Translate, node_kinds
 
 # Shorthand keys on an object table, outermost first, and the transform each one stands for.
@@ -96,10 +97,11 @@ def load_scene(name_or_path: str | os.PathLike, overrides: list[str] = ()) -> Sc
     try:
         for assignment in overrides:
             apply_override(data, assignment)
-        scene = scene_from_dict(data)
+        scene = with_files_from(scene_from_dict(data), path.parent)
+        check_obj_files(scene.meshes)
     except SceneError as err:
         raise err.in_file(source) from None
-    return with_files_from(scene, path.parent)
+    return scene
 
 
 def with_files_from(scene: Scene, folder) -> Scene:

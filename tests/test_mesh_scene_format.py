@@ -166,3 +166,14 @@ def test_the_builder_makes_the_mobile_the_museum_file_describes():
     assert mobile == load_scene("museum").meshes[7]
     assert cube_mesh().scaled(2).scale == (2.0, 2.0, 2.0)
     assert group().holding(cube_mesh()).children == (cube_mesh(),)
+
+
+def test_a_missing_obj_file_is_reported_at_load_as_the_field_that_names_it(capsys, tmp_path):
+    scene = tmp_path / "scene.toml"
+    scene.write_text('[materials.default]\n\n[[meshes]]\ntype = "group"\n\n'
+                     '[[meshes.children]]\ntype = "obj"\nfile = "models/nope.obj"\n')
+    code, _, err = run_cli(capsys, "render", scene, "--size", "16x12", "-o", tmp_path / "x.png")
+    assert_one_line_error(code, err)
+    assert f"{scene}: meshes[0].children[0].file: " in err
+    assert str(tmp_path / "models" / "nope.obj") in err
+    assert not (tmp_path / "x.png").exists()
