@@ -46,6 +46,18 @@ def scene_frame(meshes: list[Mesh]) -> tuple[np.ndarray, float]:
     return (low + high) / 2, SCENE_BOX / max(float(np.max(high - low)), 1e-30)
 
 
+def embree_scene(meshes: list[Mesh]):
+    """Embree's scene of ``meshes`` (none empty), moved and scaled by `scene_frame`: the
+    scene, and the (centre, scale) that map world points into it."""
+    rtcore_scene, TriangleMesh = import_embreex()
+    centre, scale = scene_frame(meshes)
+    scene = rtcore_scene.EmbreeScene()
+    for mesh in meshes:
+        TriangleMesh(scene, ((mesh.vertices - centre) * scale).astype(np.float32),
+                     np.ascontiguousarray(mesh.faces, dtype=np.int32))
+    return scene, centre, scale
+
+
 def cast(meshes: list[Mesh], origin, directions, inside_other=None, max_recasts: int = 8):
     """First hit of each ray with the meshes: `cast_triangles` less the triangle indices.
     """
@@ -86,7 +98,7 @@ def cast_triangles(meshes: list[Mesh], origin, directions, inside_other=None,
         Bound on the float32 rounding of each hit point, `ROUNDING_ULPS` units in the last
         place of its scaled coordinates, in world units (0 on a miss).
     """
-    rtcore_scene, TriangleMesh = import_embreex()
+    import_embreex()                      # a one-line error where embreex is missing
     n = len(directions)
     t = np.full(n, np.inf)
     normal = np.zeros((n, 3))
@@ -98,11 +110,7 @@ def cast_triangles(meshes: list[Mesh], origin, directions, inside_other=None,
     meshes = [meshes[i] for i in given]
     if not meshes:
         return t, normal, part, triangle, np.zeros(n)
-    centre, scale = scene_frame(meshes)
-    scene = rtcore_scene.EmbreeScene()
-    for mesh in meshes:
-        TriangleMesh(scene, ((mesh.vertices - centre) * scale).astype(np.float32),
-                     np.ascontiguousarray(mesh.faces, dtype=np.int32))
+    scene, centre, scale = embree_scene(meshes)
 
     # Every face's outward normal, found by (mesh, face) as first[mesh] + face.
     outward_normals = np.concatenate([face_normals(m.vertices, m.faces) for m in meshes])

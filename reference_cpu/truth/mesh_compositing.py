@@ -36,8 +36,8 @@ from scene_model.scene import LIT_SHADING, Material
 from ..planar_reflection import background_along
 from ..raster_shading import shade_points
 from ..shading import reflect
-from .embree import FLOAT32_EPS, SCENE_BOX, import_embreex, scene_frame
-from .mesh import Mesh
+from .embree import FLOAT32_EPS, SCENE_BOX, embree_scene, import_embreex
+from .mesh_cast import truth_meshes
 
 MAX_HITS = 16        # surfaces found along a ray at most (`ordered_composite`)
 
@@ -89,7 +89,7 @@ def all_hits(meshes: list[TriangleMesh], origins, directions, max_hits: int = MA
     directions : (N, 3) float64 ndarray
         Unit directions.
     """
-    rtcore_scene, EmbreeMesh = import_embreex()
+    import_embreex()                      # a one-line error where embreex is missing
     n = len(directions)
     origins = np.broadcast_to(np.asarray(origins, np.float64), (n, 3))
     t = np.full((n, max_hits), np.inf)
@@ -99,12 +99,7 @@ def all_hits(meshes: list[TriangleMesh], origins, directions, max_hits: int = MA
     given = [k for k, m in enumerate(meshes) if len(m.triangles)]
     if not given or n == 0:
         return Hits(t, part, triangle, weights)
-    centre, scale = scene_frame([Mesh(meshes[k].positions, meshes[k].triangles, 0.0, None,
-                                      "exact") for k in given])
-    scene = rtcore_scene.EmbreeScene()
-    for k in given:
-        EmbreeMesh(scene, ((meshes[k].positions - centre) * scale).astype(np.float32),
-                   np.ascontiguousarray(meshes[k].triangles, dtype=np.int32))
+    scene, centre, scale = embree_scene(truth_meshes([meshes[k] for k in given]))
     # Each new cast starts a few float32 units of the scaled scene past the last hit.
     step = 64 * FLOAT32_EPS * SCENE_BOX / scale
     start = np.zeros(n)

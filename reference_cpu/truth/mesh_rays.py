@@ -8,8 +8,8 @@ not find the very triangle it starts on ("shadow acne" of ray tracers).
 
 `reference_cpu.truth.embree.cast_triangles` shoots every ray from one shared origin (the
 eye); shadow rays start at every surface point, so this module hands Embree one origin per
-ray, in the same frame: the scene moved and scaled into a box `SCENE_BOX` wide, where
-float32 is fine.
+ray, in the same frame (`reference_cpu.truth.embree.embree_scene`): the scene moved and
+scaled into a box `reference_cpu.truth.embree.SCENE_BOX` wide, where float32 is fine.
 """
 
 from __future__ import annotations
@@ -19,7 +19,8 @@ import numpy as np
 from scene_model.meshes import TriangleMesh
 from scene_model.scene import DirectionalLight
 
-from .embree import SCENE_BOX, import_embreex
+from .embree import embree_scene, import_embreex
+from .mesh_cast import truth_meshes
 
 
 def first_hits(meshes: list[TriangleMesh], origins: np.ndarray,
@@ -35,18 +36,12 @@ def first_hits(meshes: list[TriangleMesh], origins: np.ndarray,
     directions : (N, 3) float64 ndarray
         Unit directions.
     """
-    rtcore_scene, EmbreeMesh = import_embreex()
+    import_embreex()                      # a one-line error where embreex is missing
     t = np.full(len(origins), np.inf)
     meshes = [m for m in meshes if len(m.triangles)]
     if not meshes or len(origins) == 0:
         return t
-    vertices = np.concatenate([m.positions for m in meshes])
-    low, high = vertices.min(axis=0), vertices.max(axis=0)
-    centre, scale = (low + high) / 2, SCENE_BOX / max(float(np.max(high - low)), 1e-30)
-    scene = rtcore_scene.EmbreeScene()
-    for mesh in meshes:
-        EmbreeMesh(scene, ((mesh.positions - centre) * scale).astype(np.float32),
-                   np.ascontiguousarray(mesh.triangles, dtype=np.int32))
+    scene, centre, scale = embree_scene(truth_meshes(meshes))
     found = scene.run(((origins - centre) * scale).astype(np.float32),
                       np.ascontiguousarray(directions, dtype=np.float32), output=1)
     hit = found["geomID"] >= 0
