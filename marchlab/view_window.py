@@ -71,6 +71,21 @@ class _ShownPlanes:
         viewer.status = f"saved {path}"
         return Path(path)
 
+    def _draw_target(self, scene, size, viewer: Viewer, draw) -> None:
+        """Make the picture of ``scene`` at ``size`` with ``draw()`` (the planes, or an error
+        told in the status line), count and time it, and read the depth range the depth
+        overlay needs."""
+        start = time.perf_counter()
+        try:
+            self.target = draw()
+        except MarchlabError as err:
+            viewer.status = f"cannot draw: {err}"
+        self.drawn = (scene, size)
+        self.renders += 1
+        if viewer.overlay == "depth" and self.target is not None:
+            self.depth = self.display.read_depth_range(self.target)
+        self.render_seconds = time.perf_counter() - start
+
     def object_id_at(self, viewer: Viewer, x: float, y: float) -> int:
         """The object id under view pixel (x, y) (-1: a miss), from the drawn picture."""
         if self.target is None:
@@ -153,16 +168,8 @@ class ViewDrawer(_ShownPlanes):
         return self._generated[2]
 
     def _draw(self, scene, size, program, viewer: Viewer) -> None:
-        start = time.perf_counter()
-        try:
-            self.target = self.renderer.draw_planes(program, *size)
-        except MarchlabError as err:
-            viewer.status = f"cannot draw: {err}"
-        self.drawn = (scene, size)
-        self.renders += 1
-        if viewer.overlay == "depth" and self.target is not None:
-            self.depth = self.display.read_depth_range(self.target)
-        self.render_seconds = time.perf_counter() - start
+        self._draw_target(scene, size, viewer,
+                          lambda: self.renderer.draw_planes(program, *size))
 
     def shown_image(self, viewer: Viewer, outline: bool = True) -> np.ndarray:
         """The picture drawn last (at the resolution it was drawn at), read back and encoded
@@ -215,17 +222,8 @@ class MeshDrawer(_ShownPlanes):
         scene, size = viewer.drawn_scene(), viewer.render_size()
         if self.drawn is not None and self.drawn == (scene, size):
             return False
-        start = time.perf_counter()
-        try:
-            fbo = self._renderer(scene).draw(scene, *size)
-            self.target = self.planes.convert(fbo, *size)
-        except MarchlabError as err:
-            viewer.status = f"cannot draw: {err}"
-        self.drawn = (scene, size)
-        self.renders += 1
-        if viewer.overlay == "depth" and self.target is not None:
-            self.depth = self.display.read_depth_range(self.target)
-        self.render_seconds = time.perf_counter() - start
+        self._draw_target(scene, size, viewer, lambda: self.planes.convert(
+            self._renderer(scene).draw(scene, *size), *size))
         return True
 
     def _renderer(self, scene):
