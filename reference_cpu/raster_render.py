@@ -12,6 +12,7 @@ plug in their own ways of finding surfaces, so the three pictures differ only th
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import Callable
 
@@ -238,8 +239,18 @@ def patches(meshes: list[TriangleMesh], object_id: np.ndarray, triangle: np.ndar
     for k, mesh in enumerate(meshes):
         drawn = object_id == k
         if drawn.any():
-            patch[drawn] = smooth_groups(mesh)[triangle[drawn]]
+            groups = _smooth_groups(np.asarray(mesh.triangles, np.int64).tobytes(),
+                                    np.asarray(mesh.positions, np.float64).tobytes())
+            patch[drawn] = groups[triangle[drawn]]
     return patch
+
+
+@functools.lru_cache(maxsize=256)
+def _smooth_groups(triangles: bytes, positions: bytes) -> np.ndarray:
+    """`smooth_groups` of the mesh these bytes hold, found once per mesh: every frame labels
+    its paths, and the patches of a scene's meshes take tens of milliseconds to find."""
+    return smooth_groups(TriangleMesh(np.frombuffer(positions).reshape(-1, 3), None, None,
+                                      np.frombuffer(triangles, np.int64).reshape(-1, 3)))
 
 
 def picture(scene: Scene, materials: list, raster: Raster, visibility) -> np.ndarray:
