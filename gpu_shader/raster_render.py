@@ -26,6 +26,7 @@ view only draws (`MeshRenderer.draw`); `render` reads the frame back and labels 
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Callable
 
 import numpy as np
@@ -40,7 +41,7 @@ from scene_model.frame import Frame
 from scene_model.mesh_world import scene_meshes
 from scene_model.scene import LIT_SHADING, Scene
 
-from .context import gl_context
+from .context import gl_context, subpixel_shift
 from .library import glsl_file
 from .raster import _set_camera
 from .raster_lit import RasterRenderer, read_planes
@@ -154,8 +155,10 @@ class MeshRenderer:
                                        patches(self.meshes, seen, triangle)[stencil] & 63)
         if found["layers"] is not None:
             label = path_step(label, found["layers"])
-        return mesh_frame(scene, self.meshes, self.materials, raster, visibility, "raster",
-                          "float32", color=color, path=label)
+        frame = mesh_frame(scene, self.meshes, self.materials, raster, visibility, "raster",
+                           "float32", color=color, path=label)
+        # A hardware rasteriser samples off the pixel centres (docs/equivalence.md).
+        return dataclasses.replace(frame, subpixel=subpixel_shift(self.ctx))
 
     def release(self) -> None:
         """Free every GL object this renderer made."""

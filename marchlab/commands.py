@@ -170,7 +170,7 @@ def cmd_shader(args) -> int:
 def cmd_compare(args) -> int:
     """``marchlab compare``: two backends' frames against the gates; exit 1 if one fails."""
     from .compare import (GATE_LEGEND, compare_frames, failures, gate_notes, gates_against,
-                          write_difference_images)
+                          reference_around, write_difference_images)
     refuse_empty_paths(args, "--save")
     check_outputs(folders=[args.save])
     scene = load_scene(args.scene, args.set)
@@ -194,7 +194,13 @@ def cmd_compare(args) -> int:
                 progress=progress and (lambda done, total: progress(offset + done, 2 * total)),
                 allow_large=args.allow_large))
     a, b = frames
-    c = compare_frames(a, b, epsilon=scene.render.epsilon)
+    # A hardware rasteriser samples off the pixel centres: the reference is drawn around them.
+    subpixel = max(a.subpixel, b.subpixel)
+    around = reference_around(scene, width, height, args.a, subpixel, a_precision)
+    if around:
+        print(f"the reference drawn {len(around)} more times around each pixel's centre "
+              f"(sub-pixel precision {subpixel:.3g} px)")
+    c = compare_frames(a, b, epsilon=scene.render.epsilon, around=around)
     gates = gates_against(a.precision, meshes=bool(scene.meshes))
     failed = failures(c, gates)
     print(f"{args.scene}: {args.b} {b.precision} against {args.a} {a.precision}, "
@@ -207,7 +213,7 @@ def cmd_compare(args) -> int:
         print(f"  {name:<{name_width}}  {value:<{value_width}}  {notes[name]}".rstrip())
     print(GATE_LEGEND)
     if args.save:
-        for path in write_difference_images(a, b, gates, Path(args.save)):
+        for path in write_difference_images(a, b, gates, Path(args.save), around):
             print(f"wrote {path}")
     for line in failed:
         print(f"FAIL {line}")

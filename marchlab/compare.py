@@ -16,6 +16,10 @@ Colour and display also excuse pixels whose path labels differ (`Frame.path`: th
 renderers saw a different surface, checker cell or hard-shadow state along the pixel's path,
 at a reflected checker edge or a shadow edge), as long as they lie within 1 px of a jump in
 the reference's label; like coverage pixels they are counted and limited, not hidden.
+A hardware rasteriser samples a pixel's surface up to a small fraction of a pixel from its
+centre (`Frame.subpixel`): its picture is then measured from the range of the reference's
+values around the centre (``around``, `reference_around`), not from the one at the centre
+(docs/equivalence.md, "Sub-pixel precision").
 `failures` applies the gates (`Gates`) and says in one line each what failed; `gate_notes`
 labels each figure a gate (with its limit) or a trend, as ``marchlab compare`` prints them.
 """
@@ -49,6 +53,7 @@ class Comparison:
     normal_max_degrees: float    # max angle between the normals over the interior, off jumps
     color_max: float             # max |colour_a - colour_b| over the interior, off discontinuities
     color_max_path_differs: float  # the same where the path labels differ (reported)
+    path_straddles: int          # pixels a label jump passes within b's sub-pixel precision of
     display_max: int             # max 8-bit difference outside all excused pixels
     psnr: float                  # of the linear colour over the whole image, in dB (inf: equal)
     ssim: float                  # structural similarity of the colour (nan without scikit-image)
@@ -98,7 +103,8 @@ def failures(c: Comparison, gates: Gates) -> list[str]:
                    "the reference silhouette")
     if c.hit_differs > gates.coverage_fraction * c.pixels:
         out.append(f"coverage: {c.hit_differs} pixels differ in hit "
-                   f"(limit {gates.coverage_fraction:.2%} = {gates.coverage_fraction * c.pixels:.1f})")
+                   f"(limit {gates.coverage_fraction:.2%} = "
+                   f"{gates.coverage_fraction * c.pixels:.1f})")
     if c.path_differs_far:
         out.append(f"paths: {c.path_differs_far} pixels saw different surfaces, checker cells or "
                    "shadows more than 1 px from a discontinuity of the reference")
@@ -146,7 +152,8 @@ def _fmt(value) -> str:
     return str(value)
 
 
-def compare_frames(a: Frame, b: Frame, erode: int = 2, epsilon: float | None = None) -> Comparison:
+def compare_frames(a: Frame, b: Frame, erode: int = 2, epsilon: float | None = None,
+                   around: tuple[Frame, ...] = ()) -> Comparison:
     """Statistics of frame ``b`` against the reference frame ``a`` (same size and scene).
 
     ``epsilon`` is the scene's hit threshold, which scales the depth gate; without it
@@ -157,22 +164,35 @@ def compare_frames(a: Frame, b: Frame, erode: int = 2, epsilon: float | None = N
     like pixels whose hit flags differ, they are excused from
     the colour and display statistics if they lie within 1 px of a jump in the reference's
     label, and counted in ``path_differs``.
+
+    ``around`` holds the reference drawn again with its picture moved by a fraction of a
+    pixel (`reference_around`), for a candidate that samples off the centres
+    (`Frame.subpixel`). ``b``'s depth, normal, colour and 8-bit picture are then measured
+    from the nearest value any of ``a`` and ``around`` shows at the pixel (the colours from
+    the range they span, channel by channel), and its path label differs only where it
+    differs from all of theirs. Without ``around`` each is measured from ``a`` alone.
     """
     if a.color.shape != b.color.shape:
         raise ValueError(f"frames differ in size: {a.color.shape[:2]} and {b.color.shape[:2]}")
-    differs, excused, path_differs, near_jump = disagreements(a, b)
+    references = (a, *around)
+    differs, excused, path_differs, near_jump = disagreements(a, b, around)
+    straddles = straddling(a, around)
     both = a.hit & b.hit
     interior = both & ~dilate(edges(a) | edges(b), erode)
-    smooth = interior & ~path_differs
+    smooth = interior & ~path_differs & ~straddles
 
-    ta, tb = a.depth[interior].astype(np.float64), b.depth[interior].astype(np.float64)
+    ta = a.depth[interior].astype(np.float64)
+    depth_error = outside_range(b.depth[interior].astype(np.float64),
+                                [r.depth[interior] for r in references])
     # Normals, like colours, may jump where the path labels do (a mesh's edge between two
     # smooth patches, `reference_cpu.raster_render.path_labels`).
-    na, nb = a.normal[smooth].astype(np.float64), b.normal[smooth].astype(np.float64)
-    angle = angle_between(na, nb)
+    nb = b.normal[smooth].astype(np.float64)
+    angle = np.min([angle_between(r.normal[smooth].astype(np.float64), nb)
+                    for r in references], axis=0)
     ca, cb = a.color.astype(np.float64), b.color.astype(np.float64)
-    color_diff = np.abs(ca - cb).max(axis=-1)
-    display = np.abs(a.image().astype(np.int16) - b.image().astype(np.int16)).max(axis=-1)
+    color_diff = outside_range(cb, [r.color for r in references]).max(axis=-1)
+    display = outside_range(b.image().astype(np.int16),
+                            [r.image().astype(np.int16) for r in references]).max(axis=-1)
     mse = float(np.mean((ca - cb) ** 2))
     depth_bound = (np.maximum(2 * epsilon, 1e-5 * np.abs(ta)) if epsilon is not None else None)
     return Comparison(
@@ -183,17 +203,49 @@ def compare_frames(a: Frame, b: Frame, erode: int = 2, epsilon: float | None = N
         interior=int(interior.sum()),
         path_differs=int(path_differs.sum()),
         path_differs_far=int((path_differs & ~near_jump).sum()),
-        depth_max=_max(np.abs(ta - tb)),
-        depth_max_relative=_max(np.abs(ta - tb) / np.maximum(np.abs(ta), 1e-30)),
-        depth_excess=(_max(np.abs(ta - tb) / depth_bound) if depth_bound is not None
+        depth_max=_max(depth_error),
+        depth_max_relative=_max(depth_error / np.maximum(np.abs(ta), 1e-30)),
+        depth_excess=(_max(depth_error / depth_bound) if depth_bound is not None
                       else float("nan")),
         normal_max_degrees=_max(np.degrees(angle)),
         color_max=_max(color_diff[smooth]),
         color_max_path_differs=_max(color_diff[interior & path_differs]),
-        display_max=int(display[~excused & ~path_differs].max(initial=0)),
+        path_straddles=int(straddles.sum()),
+        display_max=int(display[~excused & ~path_differs & ~straddles].max(initial=0)),
         psnr=float("inf") if mse == 0 else float(10 * np.log10(1 / mse)),
         ssim=_ssim(ca, cb),
     )
+
+
+def outside_range(values: np.ndarray, references) -> np.ndarray:
+    """How far each of ``values`` lies outside the range the ``references`` (arrays of its
+    shape) span there: 0 inside it, |value - reference| for one reference."""
+    references = np.asarray(references, np.float64)
+    low, high = references.min(axis=0), references.max(axis=0)
+    with np.errstate(invalid="ignore"):            # inf - inf where all missed: no distance
+        distance = np.maximum(np.maximum(values - high, low - values), 0.0)
+    return np.nan_to_num(distance, nan=0.0)
+
+
+def reference_around(scene, width: int, height: int, backend: str, subpixel: float,
+                     precision: str | None = None) -> tuple[Frame, ...]:
+    """The reference drawn four more times, its camera turned (`scene_model.camera.turned`)
+    by (+-2 s, +-2 s) pixels, s = ``subpixel``, for a candidate that samples each pixel up
+    to s pixels from its centre along each axis (`Frame.subpixel`): at every pixel the four
+    turned samples enclose the square of side 2 s about the centre (a turn moves a point
+    off the axis by more than it moves the centre, and a little across; tests/test_camera.py
+    measures it), so a surface that changes in one direction across that square shows
+    ``b`` no value outside the range they and the centre's span. Empty for s = 0."""
+    if subpixel <= 0:
+        return ()
+    import dataclasses
+    from scene_model.camera import turned
+    from .render import render
+    turn = 2 * subpixel
+    return tuple(
+        render(dataclasses.replace(scene, camera=turned(scene.camera, dx, dy, width, height)),
+               width, height, backend=backend, precision=precision, path_labels=True)
+        for dx in (-turn, turn) for dy in (-turn, turn))
 
 
 def _ssim(a: np.ndarray, b: np.ndarray) -> float:
@@ -243,7 +295,7 @@ def dilate(mask: np.ndarray, radius: int) -> np.ndarray:
     return out
 
 
-def disagreements(a: Frame, b: Frame):
+def disagreements(a: Frame, b: Frame, around: tuple[Frame, ...] = ()):
     """Where ``b`` saw something else than the reference ``a``, as four (H, W) bool masks.
 
     Returns ``(hit_differs, hit_excused, path_differs, near_jump)``: hit flags that differ,
@@ -251,28 +303,47 @@ def disagreements(a: Frame, b: Frame):
     labels differ (all False unless both frames have labels), and pixels within 1 px of a
     jump in a's label. Pixels missed in both count too: with anti-aliasing the label folds
     in every sample's (`reference_cpu.render.add_ray`), and a pixel whose centre misses may
-    still have samples that hit.
+    still have samples that hit. With ``around`` (`compare_frames`), a label differs only
+    where it differs from each of theirs too.
     """
     differs = a.hit != b.hit
     excused = differs & dilate(boundary(a.hit), 1)
     if a.path is not None and b.path is not None:
         path_differs = ~differs & (a.path != b.path)
+        for other in around:
+            path_differs &= other.path != b.path
         near_jump = dilate(boundary(a.path.astype(np.int64)), 1)
     else:
         path_differs = near_jump = np.zeros_like(differs)
     return differs, excused, path_differs, near_jump
 
 
-def error_mask(a: Frame, b: Frame, gates: Gates) -> np.ndarray:
+def straddling(a: Frame, around: tuple[Frame, ...]) -> np.ndarray:
+    """(H, W): pixels where a label of ``around`` differs from ``a``'s: a jump of the picture
+    lies within the square a candidate may sample (`Frame.subpixel`), so the pixel may show
+    either side or a blend, which no range of the references encloses where two jumps cross
+    (a checker's corner). All False without ``around`` or labels."""
+    out = np.zeros(a.hit.shape, bool)
+    if a.path is not None:
+        for other in around:
+            if other.path is not None:
+                out |= (other.path != a.path) | (other.hit != a.hit)
+    return out
+
+
+def error_mask(a: Frame, b: Frame, gates: Gates, around: tuple[Frame, ...] = ()) -> np.ndarray:
     """Pixels (H, W) the gates do not excuse: a hit flag or path label that differs away from
-    an edge of the reference, or a colour off by more than ``gates.color`` elsewhere."""
-    differs, excused, path_differs, near_jump = disagreements(a, b)
-    color = np.abs(a.color.astype(np.float64) - b.color).max(axis=-1) > gates.color
+    an edge of the reference, or a colour off by more than ``gates.color`` elsewhere (from
+    the range of ``a``'s and ``around``'s, as `compare_frames` measures it)."""
+    differs, excused, path_differs, near_jump = disagreements(a, b, around)
+    color = outside_range(b.color.astype(np.float64),
+                          [r.color for r in (a, *around)]).max(axis=-1) > gates.color
     return ((differs & ~excused) | (path_differs & ~near_jump)
-            | (color & ~excused & ~path_differs))
+            | (color & ~excused & ~path_differs & ~straddling(a, around)))
 
 
-def write_difference_images(a: Frame, b: Frame, gates: Gates, directory) -> list:
+def write_difference_images(a: Frame, b: Frame, gates: Gates, directory,
+                            around: tuple[Frame, ...] = ()) -> list:
     """Write a.png, b.png, the difference amplified x16 and the error mask; return the paths."""
     from PIL import Image                      # only when images are asked for
     directory = Path(directory)
@@ -282,7 +353,8 @@ def write_difference_images(a: Frame, b: Frame, gates: Gates, directory) -> list
         f"a-{a.backend}-{a.precision}.png": a.image(),
         f"b-{b.backend}-{b.precision}.png": b.image(),
         "difference-x16.png": np.floor(diff * 255 + 0.5).astype(np.uint8),
-        "error-mask.png": np.repeat(error_mask(a, b, gates)[..., None] * np.uint8(255), 3, axis=-1),
+        "error-mask.png": np.repeat(error_mask(a, b, gates, around)[..., None] * np.uint8(255),
+                                    3, axis=-1),
     }
     payloads = {}
     for name, pixels in images.items():

@@ -588,7 +588,7 @@ class Viewer:
 
         def check():
             start = time.perf_counter()
-            from .compare import compare_frames, failures, gates_against
+            from .compare import compare_frames, failures, gates_against, reference_around
             from .render import backend_problem, reference_backend, render
             reference_name = reference_backend(scene)
 
@@ -602,7 +602,10 @@ class Viewer:
             gates = gates_against("float64", meshes=bool(scene.meshes))
 
             def against_reference(frame):
-                comparison = compare_frames(reference, frame, epsilon=scene.render.epsilon)
+                # A hardware rasteriser samples off the pixel centres (marchlab.compare).
+                around = reference_around(scene, width, height, reference_name, frame.subpixel)
+                comparison = compare_frames(reference, frame, epsilon=scene.render.epsilon,
+                                            around=around)
                 return comparison, failures(comparison, gates)
 
             comparison, gpu_failures = against_reference(gpu_frame)

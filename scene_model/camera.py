@@ -16,6 +16,7 @@ shader does with a basis passed in as uniforms.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -176,3 +177,22 @@ def view_to_image(view: np.ndarray, camera: Camera, width: int, height: int) -> 
     x = (sx / (half_height * width / height) + 1) * width / 2
     y = (1 - sy / half_height) * height / 2
     return np.stack([x, y], axis=-1)
+
+
+def turned(camera: Camera, dx: float, dy: float, width: int, height: int) -> Camera:
+    """The camera turned so that its W x H picture moves by (``dx``, ``dy``) pixels (x right,
+    y down) at the centre: it looks along the original's ray through the image point
+    (W / 2 + dx, H / 2 + dy), up unchanged.
+
+    A turn is not a shift: away from the centre a point moves by up to 1 / cos^2 of its angle
+    from the axis times as much, and a little across (for a small turn, to first order). A
+    comparison samples a reference around each pixel's centre with it
+    (`marchlab.compare.reference_around`)."""
+    forward, right, up = camera_basis(camera)
+    half_height = math.tan(math.radians(camera.fov) / 2)
+    sx = 2 * dx / width * half_height * width / height
+    sy = -2 * dy / height * half_height
+    direction = forward + sx * right + sy * up
+    distance = math.dist(camera.look_at, camera.position)
+    look_at = np.asarray(camera.position, np.float64) + distance * normalize(direction)
+    return dataclasses.replace(camera, look_at=tuple(float(v) for v in look_at))

@@ -48,6 +48,11 @@ class Frame:
         neighbours the image is discontinuous (a reflected checker edge, a shadow edge), and
         two correct renderers may disagree there. A 24-bit hash; None where a backend
         does not compute it.
+    subpixel : float
+        How far from a pixel's centre, in pixels along each axis, the surface the frame shows
+        there may have been sampled: 0 where every value is computed for the ray through the
+        centre; 2^-(b + 1) for a hardware rasteriser that snaps vertices to b sub-pixel bits
+        (`gpu_shader.context.subpixel_shift`; docs/equivalence.md, "Sub-pixel precision").
     """
     color: np.ndarray
     depth: np.ndarray
@@ -61,6 +66,7 @@ class Frame:
     precision: str = ""
     path: np.ndarray | None = None
     dither: bool = False
+    subpixel: float = 0.0
 
     @property
     def height(self) -> int:
@@ -116,7 +122,7 @@ class Frame:
                                 steps=self.steps, object_id=self.object_id, hit=self.hit,
                                 gamma=self.gamma, max_steps=self.max_steps,
                                 backend=self.backend, precision=self.precision,
-                                dither=self.dither,
+                                dither=self.dither, subpixel=self.subpixel,
                                 **({} if self.path is None else {"path": self.path}))
         else:
             raise MarchlabError(f"{path}: unsupported output format {path.suffix!r} "
@@ -131,7 +137,8 @@ class Frame:
             return cls(**arrays, gamma=float(data["gamma"]), max_steps=int(data["max_steps"]),
                        backend=str(data["backend"]), precision=str(data["precision"]),
                        path=data["path"] if "path" in data else None,
-                       dither=bool(data["dither"]) if "dither" in data else False)
+                       dither=bool(data["dither"]) if "dither" in data else False,
+                       subpixel=float(data["subpixel"]) if "subpixel" in data else 0.0)
 
 
 def png_bytes(image: np.ndarray) -> bytes:
