@@ -7,7 +7,9 @@ pipeline (float32, shadows, mirrors and transparency all drawn on the GPU:
 flags and path labels may differ only within a pixel of an edge (on at most 0.05% and 0.2%
 of the pixels), the interior's depth within max(2 epsilon, 1e-5 t), normals within 0.5
 degrees, colours within 1/255 (2/255 against the float64 reference) and the 8-bit pictures
-within one level.
+within one level. On a hardware GPU, which samples each pixel up to 1/512 of a pixel from
+its centre, the reference is also drawn around the centres (`marchlab.compare.reference_around`;
+docs/equivalence.md, "Sub-pixel precision").
 
 The cases: the bundled mesh scenes ``meshes`` and ``museum``, then the small ``meshes``
 scene changed in one feature each (a shading model, a light type with its shadows, a
@@ -23,7 +25,8 @@ import numpy as np
 import pytest
 
 from marchlab import load_scene, render
-from marchlab.compare import boundary, compare_frames, dilate, failures, gates_against
+from marchlab.compare import (boundary, compare_frames, dilate, failures, gates_against,
+                              reference_around)
 from required_backends import need_backend
 from scene_model.scenefile import scene_from_dict, scene_to_dict
 
@@ -102,7 +105,10 @@ SCENES = {"bundled meshes": lambda: load_scene("meshes"),
 def assert_passes(reference_backend, candidate_backend, scene):
     a = render(scene, WIDTH, HEIGHT, backend=reference_backend)
     b = render(scene, WIDTH, HEIGHT, backend=candidate_backend)
-    c = compare_frames(a, b, epsilon=scene.render.epsilon)
+    # A hardware GPU samples off the pixel centres: the reference is drawn around them.
+    around = reference_around(scene, WIDTH, HEIGHT, reference_backend,
+                              max(a.subpixel, b.subpixel))
+    c = compare_frames(a, b, epsilon=scene.render.epsilon, around=around)
     assert a.hit.sum() > 1000                     # the case draws something
     assert failures(c, gates_against(a.precision, meshes=True)) == []
 

@@ -26,23 +26,29 @@ import pytest
 
 from gpu_shader.raster_lit import RasterRenderer, draw
 from marchlab import render
-from marchlab.compare import boundary, dilate
+from marchlab.compare import boundary, dilate, outside_range
 from mesh_scenes import CAMERA, HEIGHT, SCENES, WIDTH, turned
 from reference_cpu.raster_shading import shade_raster
 from reference_cpu.rasterise import rasterise
 from reference_cpu.shading import checker_parity
 from scene_model.builder import box, plane as sdf_plane
-from scene_model.camera import Camera, camera_rays
+from scene_model.camera import Camera, camera_rays, turned as turned_camera
 from scene_model.frame import to_uint8
 from scene_model.meshes import cube, plane
 from scene_model.scene import (Checker, DirectionalLight, EquirectBackground, Material,
                                PointLight, RenderSettings, Scene, SkyBackground,
                                SolidBackground, SpotLight, StudioBackground, Texture)
+from subpixel import around, steady
 
 COLOR_ATOL = 2e-5           # float32 shading of the same planes against float64
 BAND_ATOL = 1e-4            # toon and stripes: a rounding of N.L times the bands' slope 60
 GEOMETRY_ATOL = 5e-5        # against the NumPy rasteriser's planes (float64 geometry)
 GEOMETRY_BAND_ATOL = 5e-4
+# On a hardware GPU, beyond the range of the NumPy pictures around the pixel's centre
+# (tests/subpixel.py): that range encloses what changes one way across the square the GPU
+# may sample, not a uv texture's texels or a stripe's band seen at a slant. Measured on an
+# H100: 9.1e-4 (uv texture), 2.1e-3 (stripes); under one level of the 8-bit picture.
+HARDWARE_ATOL = 3e-3
 TEXTURE_ATOL = 1e-4         # NumPy raster against the sphere tracer, where it stops 1e-6 short
 AMBIENT = (0.1, 0.1, 0.12)
 LIGHTS = {
@@ -73,11 +79,16 @@ def checker_edges(raster, materials):
     return dilate(boundary(np.where(checkered, parity, -1)), 1)
 
 
-def assert_same_picture(color, reference, atol):
-    """Every pixel within ``atol``, and the 8-bit pictures within one level."""
-    np.testing.assert_allclose(color, reference, rtol=0, atol=atol)
-    levels = np.abs(to_uint8(color).astype(int) - to_uint8(reference).astype(int))
-    assert levels.max() <= 1
+def assert_same_picture(color, reference, atol, around=()):
+    """Every pixel within ``atol``, and the 8-bit pictures within one level: of
+    ``reference``, or of the range it and the pictures ``around`` it span there."""
+    if not around:
+        np.testing.assert_allclose(color, reference, rtol=0, atol=atol)
+    error = outside_range(color, [reference, *around])
+    assert error.max(initial=0.0) <= atol, f"{(error > atol).sum()} values off by {error.max()}"
+    levels = outside_range(to_uint8(color).astype(int),
+                           [to_uint8(c).astype(int) for c in (reference, *around)])
+    assert levels.max(initial=0) <= 1
 
 
 @pytest.mark.parametrize("model", MODELS)
@@ -93,15 +104,24 @@ def test_gpu_colour_equals_shade_raster_of_its_planes(gpu, name, model):
     assert_same_picture(color[same], reference[same],
                         BAND_ATOL if model in BANDED else COLOR_ATOL)
 
-    numpy_raster = rasterise(meshes, CAMERA, WIDTH, HEIGHT)
-    numpy_color = shade_raster(numpy_raster, CAMERA, materials, ALL_LIGHTS, AMBIENT, model,
-                               background)
+    def numpy_picture(camera):
+        numpy_raster = rasterise(meshes, camera, WIDTH, HEIGHT)
+        return numpy_raster, shade_raster(numpy_raster, camera, materials, ALL_LIGHTS,
+                                          AMBIENT, model, background)
+
+    numpy_raster, numpy_color = numpy_picture(CAMERA)
+    # On a hardware GPU, the NumPy picture around each pixel's centre (tests/subpixel.py).
+    turned_pictures = around(lambda dx, dy: numpy_picture(
+        turned_camera(CAMERA, dx, dy, WIDTH, HEIGHT)))
     same &= ((numpy_raster.object_id == raster.object_id)
              & (numpy_raster.triangle == raster.triangle)
-             & ~checker_edges(numpy_raster, materials))
+             & ~checker_edges(numpy_raster, materials)
+             & steady([numpy_raster] + [r for r, _ in turned_pictures]))
     assert (same & raster.hit).sum() > 1000
+    atol = GEOMETRY_BAND_ATOL if model in BANDED else GEOMETRY_ATOL
     assert_same_picture(color[same], numpy_color[same],
-                        GEOMETRY_BAND_ATOL if model in BANDED else GEOMETRY_ATOL)
+                        HARDWARE_ATOL if turned_pictures else atol,
+                        around=[c[same] for _, c in turned_pictures])
 
 
 @pytest.mark.parametrize("light", LIGHTS)

@@ -12,16 +12,21 @@ lights, and one (within 1.5e-7 m of the threshold) for the point light with 5 x 
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
 from gpu_shader import raster_shadow_map as gpu_map
+from marchlab.compare import outside_range
 from mesh_scenes import CAMERA, HEIGHT, SCENES, WIDTH
 from reference_cpu import shadow_map as numpy_map
 from reference_cpu.rasterise import rasterise
 from reference_cpu.shadow_volumes import shadow_volume_visibility
+from scene_model.camera import turned
 from scene_model.geometry import normalize
 from scene_model.scene import DirectionalLight, PointLight
+from subpixel import around
 
 MESHES = SCENES["cube and cone on a floor"]
 LIGHTS = {"point": PointLight(position=(-1.0, 3.0, -2.5)),
@@ -31,6 +36,11 @@ GOOD_BIAS, GOOD_SLOPE = 1e-3, 1.5
 HANDFUL_PIXELS = 3
 ROUNDING = 1e-5         # m: a few float32 steps of a depth of 1 to 7 m (one is 4.8e-7 at 4 m)
 EDGE = 1e-2             # texels
+# On a hardware GPU the map itself is drawn from vertices snapped to 1/256 of a texel, which
+# moves its depths and its triangles' edges a little (measured on an H100: one pixel of 6,912
+# went the other way, 5.7e-5 m from the threshold and 0.022 texels from an edge).
+ROUNDING_HARDWARE = 1e-4
+EDGE_HARDWARE = 5e-2
 
 
 def test_gpu_depth_map_is_the_numpy_depth_map(gpu):
@@ -45,28 +55,51 @@ def test_gpu_depth_map_is_the_numpy_depth_map(gpu):
         drawn = np.isfinite(reference)
         assert drawn.sum() > 0.1 * SIZE * SIZE                      # the map sees the scene
         assert (drawn != np.isfinite(candidate)).sum() <= 10
-        both = drawn & np.isfinite(candidate)
-        error = np.abs(candidate[both] - reference[both])
+        # On a hardware GPU, from the range of the maps around each texel's centre.
+        maps = [reference, *around(lambda dx, dy: numpy_map.depth_map(
+            MESHES, turned_view(view, dx, dy)))]
+        both = drawn & np.isfinite(candidate) & np.all(np.isfinite(maps), axis=0)
+        error = outside_range(candidate[both], [m[both] for m in maps])
         assert np.quantile(error, 0.999) < 4e-6
         assert error.max() < 2e-4
+
+
+def turned_view(view, dx, dy):
+    """The light's view with its map moved by (dx, dy) texels (x right, y down), as
+    `scene_model.camera.turned` moves a picture: a perspective one turned, an orthographic
+    one shifted."""
+    if view.camera is not None:
+        return dataclasses.replace(view, camera=turned(view.camera, dx, dy, view.size,
+                                                       view.size))
+    return dataclasses.replace(view, low=view.low + np.array([dx, -dy]) * view.texel)
 
 
 @pytest.mark.parametrize("pcf", [1, 5])
 @pytest.mark.parametrize("name", LIGHTS)
 def test_gpu_shadow_map_is_the_numpy_shadow_map_but_at_rounding(gpu, name, pcf):
     light = LIGHTS[name]
-    raster = rasterise(MESHES, CAMERA, WIDTH, HEIGHT)
-    reference = numpy_map.shadow_map_visibility(MESHES, raster, CAMERA, light, SIZE,
-                                                GOOD_BIAS, GOOD_SLOPE, pcf)
+
+    def numpy_visibility(dx=0.0, dy=0.0):
+        camera = turned(CAMERA, dx, dy, WIDTH, HEIGHT)
+        raster = rasterise(MESHES, camera, WIDTH, HEIGHT)
+        return raster, numpy_map.shadow_map_visibility(MESHES, raster, camera, light, SIZE,
+                                                       GOOD_BIAS, GOOD_SLOPE, pcf)
+
+    raster, reference = numpy_visibility()
     candidate, = gpu_map.shadow_map_visibility(MESHES, [light], CAMERA, WIDTH, HEIGHT, SIZE,
                                            GOOD_BIAS, GOOD_SLOPE, pcf)
     assert candidate.shape == (HEIGHT, WIDTH)
     assert (reference < 1).sum() > 1000                             # the test sees a shadow
-    # PCF's fractions k / pcf^2 round differently in float32 and float64: compare k.
-    differ = np.round(reference * pcf ** 2) != np.round(candidate * pcf ** 2)
+    # PCF's fractions k / pcf^2 round differently in float32 and float64: compare k, on a
+    # hardware GPU from the range of the NumPy ones around each pixel's centre.
+    turned_visibility = around(numpy_visibility)
+    counts = [np.round(v * pcf ** 2) for v in [reference] + [v for _, v in turned_visibility]]
+    differ = outside_range(np.round(candidate * pcf ** 2), counts) > 0
     assert differ.sum() <= HANDFUL_PIXELS
     margin, edge = _closeness(raster, light, GOOD_BIAS, GOOD_SLOPE, pcf)
-    assert np.all((margin[differ] < ROUNDING) | (edge[differ] < EDGE))
+    rounding, near_edge = (ROUNDING_HARDWARE, EDGE_HARDWARE) if turned_visibility else (
+        ROUNDING, EDGE)
+    assert np.all((margin[differ] < rounding) | (edge[differ] < near_edge))
 
 
 @pytest.mark.parametrize("name", LIGHTS)
