@@ -34,6 +34,10 @@ rasterisation at equal geometric error.
    a pass's fragments when it is flushed, so the glFinish charges each pass its own work),
    the rest being Python, uniforms and state. ``--passes`` runs this part alone.
 
+6. ``--live``: the live view alone (`MeshRenderer.draw`) after 20 warm-up frames, 60 frames
+   each finished with glFinish, then 60 back to back, at 640x480 and 1920x1080: a GPU whose
+   clocks idle low (an H100's at 345 MHz) needs the warm-up to be measured at speed.
+
 Medians of ``--repeat`` frames after one warm-up; machines are shared and noisy, so compare
 the ratios of one run.
 """
@@ -91,12 +95,17 @@ def main() -> None:
     parser.add_argument("--lit-only", action="store_true", help="time the lit pipeline only")
     parser.add_argument("--museum-only", action="store_true",
                         help="time the museum through the three mesh backends only")
+    parser.add_argument("--live", action="store_true",
+                        help="time the museum's live view after a warm-up only")
     parser.add_argument("--passes", action="store_true",
                         help="time the museum's live view pass by pass only")
     args = parser.parse_args()
     width, height = args.size
     from gpu_shader.raster import rasterise as gpu_rasterise
     from gpu_shader.render import device_name
+    if args.live:
+        museum_live()
+        return
     if args.passes:
         museum_passes(width, height, args.repeat)
         print(f"\ngpu: {device_name()}")
@@ -183,6 +192,40 @@ def museum_frames(width, height, repeat):
     for name, (run, times) in rows.items():
         seconds = median_seconds(run, times)
         print(f"| {name} | {1000 * seconds:.1f} | {1 / seconds:.1f} |", flush=True)
+    renderer.release()
+
+
+def museum_live(warm_up=20, frames=60):
+    """Part 6: the museum's live view at 640x480 and 1920x1080 after ``warm_up`` frames:
+    the median of ``frames`` frames each to glFinish, and ``frames`` drawn back to back."""
+    from gpu_shader.raster_render import MeshRenderer
+    from marchlab import load_scene
+    scene = load_scene("museum")
+    renderer = MeshRenderer(scene)
+
+    def finish():
+        with renderer.ctx:
+            renderer.ctx.finish()
+
+    print("\n| museum live view | each frame to glFinish, median ms (min-max) | back to back, "
+          "ms a frame |\n|---|---:|---:|")
+    for width, height in [(640, 480), (1920, 1080)]:
+        for _ in range(warm_up):
+            renderer.draw(scene, width, height)
+        finish()
+        times = []
+        for _ in range(frames):
+            start = time.perf_counter()
+            renderer.draw(scene, width, height)
+            finish()
+            times.append(time.perf_counter() - start)
+        start = time.perf_counter()
+        for _ in range(frames):
+            renderer.draw(scene, width, height)
+        finish()
+        print(f"| {width}x{height} | {1000 * statistics.median(times):.2f} "
+              f"({1000 * min(times):.2f}-{1000 * max(times):.2f}) | "
+              f"{1000 * (time.perf_counter() - start) / frames:.2f} |")
     renderer.release()
 
 
