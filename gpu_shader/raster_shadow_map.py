@@ -1,8 +1,9 @@
 """Shadow maps on the GPU: the NumPy shadow map (`reference_cpu.shadow_map`) drawn by OpenGL.
 
-The same map, seen the same way: `reference_cpu.shadow_map.light_view` fits the light's
+The same map, seen the same way: `reference_cpu.shadow_map.light_views` fits the light's
 view (an orthographic box along a directional light, one perspective frustum from a point
-or spot light) and both versions take their matrices from it. Two passes per light:
+or spot light, or a cube of six for one among the objects) and both versions take their
+matrices from it. Two passes per light:
 
 1. **Depth from the light** (glsl/raster/shadow_map_depth.vert, .frag): every mesh drawn
    into a float32 texture of size x size texels, each holding the depth along the light's
@@ -29,7 +30,7 @@ from functools import cache
 import numpy as np
 
 from reference_cpu.rasterise import NEAR
-from reference_cpu.shadow_map import MAX_TILT, LightView, light_view
+from reference_cpu.shadow_map import MAX_TILT, LightView, light_views
 from scene_model.camera import Camera, camera_basis
 from scene_model.meshes import TriangleMesh
 
@@ -38,7 +39,9 @@ from .dialects import GLSL
 from .library import fill_template, glsl_file, load_library
 from .raster import FAR, _set_camera
 
-MAP_UNIT = 0            # the texture unit the lookup reads the map from
+MAP_UNIT = 0            # the texture unit the lookup reads the map from (a cube's faces
+                        # from this unit and the five after it)
+CUBE_FACES = 6
 
 
 def shadow_map_textures(ctx, meshes: list[TriangleMesh], lights, camera: Camera, width: int,
@@ -68,7 +71,7 @@ def shadow_map_textures(ctx, meshes: list[TriangleMesh], lights, camera: Camera,
     """
     if pcf < 1 or pcf % 2 == 0:
         raise ValueError(f"pcf must be an odd number of texels (got {pcf})")
-    views = [light_view(meshes, light, size) for light in lights]   # refuses a bad light early
+    views = [light_views(meshes, light, size) for light in lights]  # refuses a bad light early
     visibilities = [ctx.texture((width, height), 1, dtype="f4") for _ in lights]
     made = []
     try:
@@ -84,20 +87,25 @@ def shadow_map_textures(ctx, meshes: list[TriangleMesh], lights, camera: Camera,
                                      index_buffer=ibo, index_element_size=4))
             made += [vbo, ibo, *pair]
             vertex_arrays.append(pair)
-        stored = ctx.texture((size, size), 1, dtype="f4")
+        # One map per light, or a cube's six; every unit the lookup names gets a texture.
+        stored = [ctx.texture((size, size), 1, dtype="f4")
+                  for _ in range(max(len(faces) for faces in views))]
         depth = ctx.depth_texture((width, height))
-        made += [stored, depth]
-        map_fbo = ctx.framebuffer(color_attachments=[stored])
-        made.append(map_fbo)
+        made += [*stored, depth]
+        map_fbos = [ctx.framebuffer(color_attachments=[texture]) for texture in stored]
+        made += map_fbos
         _set_camera(lookup_program, camera, width, height)
         settings = {"map_size": float(size), "bias": bias, "slope_bias": slope_bias,
-                    "max_tilt": MAX_TILT, "reach": pcf // 2, "shadow_map": MAP_UNIT}
+                    "max_tilt": MAX_TILT, "reach": pcf // 2, "shadow_map": MAP_UNIT,
+                    **{f"shadow_face{k}": MAP_UNIT + k for k in range(1, CUBE_FACES)}}
         for name, value in settings.items():
-            lookup_program[name].value = value
-        for view, visibility in zip(views, visibilities):
-            draw_depth(ctx, depth_program, [a for a, _ in vertex_arrays], view, map_fbo)
-            _set_light_view(lookup_program, view)
-            stored.use(location=MAP_UNIT)
+            _set_uniform(lookup_program, name, value)
+        for faces, visibility in zip(views, visibilities):
+            for k, view in enumerate(faces):
+                draw_depth(ctx, depth_program, [a for a, _ in vertex_arrays], view, map_fbos[k])
+            _set_light_view(lookup_program, faces)
+            for k in range(CUBE_FACES):
+                stored[min(k, len(stored) - 1)].use(location=MAP_UNIT + k)
             screen = ctx.framebuffer(color_attachments=[visibility], depth_attachment=depth)
             made.append(screen)
             screen.use()
@@ -122,7 +130,7 @@ def shadow_map_textures(ctx, meshes: list[TriangleMesh], lights, camera: Camera,
 def draw_depth(ctx, program, vertex_arrays, view: LightView, fbo) -> None:
     """Draw the light's depth map into ``fbo`` (one S x S float32 attachment): the nearest
     depth along the light's axis (m) at each texel centre, +inf where nothing is."""
-    _set_light_view(program, view)
+    _set_light_view(program, [view])
     program["near"].value, program["far"].value = NEAR, FAR
     fbo.use()
     fbo.viewport = (0, 0, view.size, view.size)
@@ -180,10 +188,17 @@ def shadow_map_visibility(meshes: list[TriangleMesh], lights, camera: Camera, wi
                 texture.release()
 
 
-def _set_light_view(program, view: LightView) -> None:
+def _set_light_view(program, views: list[LightView]) -> None:
     """The light's frame and projection, as glsl/raster/shadow_map_depth.vert reads them:
     a perspective map looks from the light through tan(fov / 2); an orthographic one from
-    the origin along its frame, centred on the map's middle, half its side wide."""
+    the origin along its frame, centred on the map's middle, half its side wide. For a cube
+    (six views), the first face's, and each face's frame in the lookup's face arrays."""
+    view = views[0]
+    if len(views) == CUBE_FACES:
+        bases = [camera_basis(v.camera) for v in views]
+        for name, k in (("face_forward", 0), ("face_right", 1), ("face_up", 2)):
+            _set_uniform(program, name, [tuple(float(x) for x in b[k]) for b in bases])
+    _set_uniform(program, "cube", len(views) == CUBE_FACES)
     if view.camera is not None:
         forward, right, up = camera_basis(view.camera)
         eye, center = view.camera.position, (0.0, 0.0)
@@ -197,6 +212,13 @@ def _set_light_view(program, view: LightView) -> None:
               "perspective": view.camera is not None}
     for name, value in values.items():
         program[name].value = value
+
+
+def _set_uniform(program, name: str, value) -> None:
+    """Set a uniform the program has; the depth pass's program has no lookup's uniforms."""
+    uniform = program.get(name, None)
+    if uniform is not None:
+        uniform.value = value
 
 
 _compiled: dict[int, tuple] = {}

@@ -19,10 +19,13 @@ hides it. Cheap and general, but the map is a picture, and three artefacts follo
 The map's view: a directional light looks along its direction with an orthographic
 projection fitted to the scene's bounds. A point light (or a spot light, from its position)
 gets **one perspective map** looking from the light at the scene, its field of view the
-narrowest square frustum that holds every vertex; that needs the whole scene on one side
-of the light (a light among the objects would need a cube map of six such views). The
-maps are drawn by the NumPy rasteriser's own steps (`reference_cpu.rasterise`) and hold
-float32 depth, as a GPU's depth texture does: view depth along the light's axis, in metres.
+narrowest square frustum that holds every vertex, where the whole scene lies on one side of
+the light within `MAX_HALF_ANGLE` of its axis. A light among the objects gets a **cube map**
+instead (Gerasimov, "Omnidirectional shadow mapping", GPU Gems 2004): six square maps of
+90 degrees, one along each axis, and a point is looked up in the face its direction from
+the light leans towards most (`cube_face`). The maps are drawn by the NumPy rasteriser's
+own steps (`reference_cpu.rasterise`) and hold float32 depth, as a GPU's depth texture does:
+view depth along the light's (or the face's) axis, in metres.
 """
 
 from __future__ import annotations
@@ -41,6 +44,12 @@ from .rasterise import Raster, clipped_triangles, draw_triangle, project_corners
 
 MAX_HALF_ANGLE = 75.0        # degrees: a wider perspective map would waste most of its texels
 MAX_TILT = 10.0              # the slope bias's tan(theta) is clamped here (grazing light)
+# A cube map's faces, in `cube_face`'s order (+x, -x, +y, -y, +z, -z): each one's axis and
+# the up direction of its square 90-degree frustum.
+CUBE_AXES = ((1.0, 0.0, 0.0), (-1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, -1.0, 0.0),
+             (0.0, 0.0, 1.0), (0.0, 0.0, -1.0))
+CUBE_UPS = ((0.0, 1.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, -1.0), (0.0, 0.0, 1.0),
+            (0.0, 1.0, 0.0), (0.0, 1.0, 0.0))
 
 
 @dataclass(frozen=True)
@@ -98,6 +107,40 @@ def light_view(meshes: list[TriangleMesh], light, size: int) -> LightView:
     camera = Camera(position=tuple(eye), look_at=tuple(eye + axis), up=tuple(frame[1]),
                     fov=2 * half * (1 + 1e-6))
     return LightView(size, camera=camera)
+
+
+def light_views(meshes: list[TriangleMesh], light, size: int) -> list[LightView]:
+    """The maps ``light`` needs: its one view (`light_view`), or, for a point or spot light
+    whose scene does not fit one frustum (the light among the objects), the six faces of a
+    cube map (`cube_views`)."""
+    try:
+        return [light_view(meshes, light, size)]
+    except ValueError:
+        if isinstance(light, DirectionalLight):
+            raise
+        return cube_views(light.position, size)
+
+
+def cube_views(position, size: int) -> list[LightView]:
+    """The six 90-degree perspective views of a cube map from ``position``, size x size
+    texels each, in `cube_face`'s order."""
+    eye = np.asarray(position, np.float64)
+    return [LightView(size, camera=Camera(position=tuple(float(v) for v in eye),
+                                          look_at=tuple(float(v) for v in eye + axis),
+                                          up=up, fov=90.0))
+            for axis, up in zip(CUBE_AXES, CUBE_UPS)]
+
+
+def cube_face(points: np.ndarray, position) -> np.ndarray:
+    """(N,) int: the cube map face each of ``points`` (N, 3) falls in, seen from
+    ``position``: its largest coordinate axis k of p - position, face 2 k for a positive
+    coordinate and 2 k + 1 for a negative one. A square 90-degree frustum holds exactly the
+    directions whose largest coordinate is its axis's, so the point lies inside that face's
+    map (on its edge where two coordinates tie; the first axis wins)."""
+    offset = np.asarray(points, np.float64) - np.asarray(position, np.float64)
+    axis = np.argmax(np.abs(offset), axis=-1)
+    negative = np.take_along_axis(offset, axis[:, None], axis=-1)[:, 0] < 0
+    return 2 * axis + negative
 
 
 def map_coordinates(view: LightView, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -185,17 +228,36 @@ def shadow_map_visibility(meshes: list[TriangleMesh], raster: Raster, camera: Ca
     """
     if pcf < 1 or pcf % 2 == 0:
         raise ValueError(f"pcf must be an odd number of texels (got {pcf})")
-    view = light_view(meshes, light, size)
-    stored = depth_map(meshes, view)
+    views = light_views(meshes, light, size)
     hit = raster.hit
     points = surface_points(raster, camera)[hit]
-    image, depth = map_coordinates(view, points)
+    normals = raster.normal[hit]
     if isinstance(light, DirectionalLight):
         to_light = -normalize(np.asarray(light.direction, np.float64))
     else:
         to_light = normalize(np.asarray(light.position, np.float64) - points)
-    cosine = np.clip(np.abs(np.sum(raster.normal[hit] * to_light, axis=-1)), 1e-12, 1.0)
+    cosine = np.clip(np.abs(np.sum(normals * to_light, axis=-1)), 1e-12, 1.0)
     tilt = np.minimum(np.sqrt(1 - cosine ** 2) / cosine, MAX_TILT)
+    # One map, or each point in its cube face's; the filter stays inside the face (its
+    # texels clamped at the face's edge, as the GPU's lookup clamps them).
+    face = (cube_face(points, light.position) if len(views) == 6
+            else np.zeros(len(points), np.int64))
+    lit = np.zeros(len(points))
+    for k, view in enumerate(views):
+        mine = face == k
+        if mine.any():
+            lit[mine] = _percentage_lit(depth_map(meshes, view), view, points[mine],
+                                        tilt[mine], bias, slope_bias, pcf)
+    visibility = np.ones(raster.depth.shape)
+    visibility[hit] = lit / pcf ** 2
+    return visibility
+
+
+def _percentage_lit(stored, view: LightView, points, tilt, bias, slope_bias, pcf):
+    """How many of the pcf x pcf texels round each point's (N,) hold a depth it is no deeper
+    than, give or take the bias and slope bias."""
+    size = view.size
+    image, depth = map_coordinates(view, points)
     allowed = bias + slope_bias * texel_width(view, depth) * tilt
     column, row = (np.floor(image[:, k]).astype(np.int64) for k in (0, 1))
     lit = np.zeros(len(points))
@@ -204,6 +266,4 @@ def shadow_map_visibility(meshes: list[TriangleMesh], raster: Raster, camera: Ca
         for dx in range(-reach, reach + 1):
             texel = stored[np.clip(row + dy, 0, size - 1), np.clip(column + dx, 0, size - 1)]
             lit += depth <= texel + allowed
-    visibility = np.ones(raster.depth.shape)
-    visibility[hit] = lit / pcf ** 2
-    return visibility
+    return lit

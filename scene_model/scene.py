@@ -394,8 +394,9 @@ class RenderSettings(Record):
                    "the pixels a shadow ray finds) or by a shadow map (a depth picture from "
                    "the light, with its acne, peter-panning and aliasing; "
                    "docs/raster-shadows.md). The embree backend casts shadow rays.")
-    shadow_map_size: int = param(2048, "Meshes, shadow map: texels along each side.",
-                                 Range(16, 8192))
+    shadow_map_size: int = param(2048, "Meshes, shadow map: texels along each side (of each "
+                                       "of a cube map's six faces, for a point or spot light "
+                                       "among the objects).", Range(16, 8192))
     shadow_bias: float = param(1e-3, "Meshes, shadow map: metres a stored depth is pushed "
                                      "away from the light before the test (against acne).",
                                Range(0.0, 10.0))

@@ -19,7 +19,8 @@ import pytest
 from marchlab.compare import boundary, dilate
 from mesh_scenes import CAMERA, HEIGHT, SCENES, WIDTH
 from reference_cpu.rasterise import rasterise
-from reference_cpu.shadow_map import (depth_map, light_view, shadow_map_visibility,
+from reference_cpu.shadow_map import (CUBE_AXES, cube_face, depth_map, light_view,
+                                      light_views, map_coordinates, shadow_map_visibility,
                                       surface_points)
 from reference_cpu.shadow_volumes import shadow_volume_visibility
 from scene_model.meshes import cube, plane, transformed
@@ -149,10 +150,49 @@ def test_percentage_closer_filtering_softens_only_the_edges():
     assert not (partial & ~dilate(boundary(exact), 3)).any()
 
 
-def test_a_light_among_the_objects_and_an_even_kernel_are_refused():
+def test_an_even_kernel_is_refused():
     raster, _ = exact_shadows(LIGHTS["point"])
-    with pytest.raises(ValueError, match="cube map"):
-        shadow_map_visibility(MESHES, raster, CAMERA, PointLight(position=(0.0, 0.5, 1.0)),
-                              64, GOOD_BIAS)
     with pytest.raises(ValueError, match="odd"):
         shadow_map_visibility(MESHES, raster, CAMERA, LIGHTS["point"], 64, GOOD_BIAS, pcf=2)
+
+
+# A point light among the objects: between the cube and the cone, low, so that it shadows
+# the floor on every side; no single frustum holds the scene.
+AMONG = PointLight(position=(0.2, 0.45, 0.4))
+
+
+def test_a_light_among_the_objects_gets_a_cube_of_six_square_maps():
+    with pytest.raises(ValueError, match="cube map"):
+        light_view(MESHES, AMONG, 64)
+    views = light_views(MESHES, AMONG, 64)
+    assert len(views) == 6 and all(v.camera.fov == 90.0 for v in views)
+    assert light_views(MESHES, LIGHTS["point"], 64) == [light_view(MESHES, LIGHTS["point"], 64)]
+    # Each face looks along its axis, and a point leaning towards an axis falls inside that
+    # face's map, within its square (texel coordinates in [0, S]).
+    rng = np.random.default_rng(5)
+    points = np.asarray(AMONG.position) + rng.normal(size=(2000, 3))
+    face = cube_face(points, AMONG.position)
+    for k, view in enumerate(views):
+        forward = np.subtract(view.camera.look_at, view.camera.position)
+        np.testing.assert_allclose(forward, CUBE_AXES[k], atol=1e-15)
+        image, depth = map_coordinates(view, points[face == k])
+        assert np.all(depth > 0) and np.all((image >= 0) & (image <= 64))
+    assert np.array_equal(np.bincount(face, minlength=6) > 200, [True] * 6)
+
+
+def test_a_cube_map_agrees_with_the_exact_shadows_but_beside_an_edge_or_a_seam():
+    """A point light among the objects: with a good bias a 1024 cube map shadows the pixels
+    the shadow volumes do, but within a pixel of an edge of the shadows or the objects, or
+    of a seam between two faces (where the 3 x 3 filter is clamped at its face's edge;
+    measured: no pixel wrong away from an edge, 11 of 4,463 drawn beside one)."""
+    raster, exact = exact_shadows(AMONG)
+    assert (raster.hit & (exact == 0)).sum() > 500 and (raster.hit & (exact == 1)).sum() > 500
+    visibility = shadow_map_visibility(MESHES, raster, CAMERA, AMONG, 1024, GOOD_BIAS,
+                                       GOOD_SLOPE)
+    face = np.full(raster.hit.shape, -1)
+    face[raster.hit] = cube_face(surface_points(raster, CAMERA)[raster.hit], AMONG.position)
+    assert len(np.unique(face[raster.hit])) >= 4          # the picture spans several faces
+    near = dilate(boundary(exact) | boundary(raster.object_id) | boundary(face), 1)
+    wrong = (visibility != exact) & raster.hit
+    assert not (wrong & ~near).any()
+    assert wrong.sum() <= 0.05 * near.sum()

@@ -98,8 +98,17 @@ CASES = {
     "fog": lambda: changed({"fog": {"color": [0.8, 0.85, 0.9], "density": 0.15}}),
     "three lights, shadow maps": lambda: changed({"shadow_method": "map"}, lights=THREE),
 }
+def museum_with_shadow_maps():
+    """The museum's three lights shadowed by maps: its point light, among the exhibits, by a
+    cube map of six faces (reference_cpu/shadow_map.py)."""
+    data = scene_to_dict(load_scene("museum"))
+    data["render"].update({"shadow_method": "map", "shadow_map_size": 1024})
+    return scene_from_dict(data)
+
+
 SCENES = {"bundled meshes": lambda: load_scene("meshes"),
-          "bundled museum": lambda: load_scene("museum"), **CASES}
+          "bundled museum": lambda: load_scene("museum"),
+          "bundled museum, shadow maps": museum_with_shadow_maps, **CASES}
 
 
 def assert_passes(reference_backend, candidate_backend, scene):

@@ -23,6 +23,17 @@ uniform float light_half;
 uniform bool perspective;
 
 uniform sampler2D shadow_map;   // S x S, red: the nearest depth (m), +inf where nothing is
+// A cube map (a point or spot light among the objects): six 90-degree faces, face 0 in
+// shadow_map, each looking along face_forward[k] (reference_cpu/shadow_map.py, cube_views).
+uniform bool cube;
+uniform sampler2D shadow_face1;
+uniform sampler2D shadow_face2;
+uniform sampler2D shadow_face3;
+uniform sampler2D shadow_face4;
+uniform sampler2D shadow_face5;
+uniform vec3 face_right[6];
+uniform vec3 face_up[6];
+uniform vec3 face_forward[6];
 uniform float map_size;         // S
 uniform float bias;             // m
 uniform float slope_bias;       // texels of depth slope
@@ -34,17 +45,40 @@ out float visibility;           // 1 lit, 0 shadowed, between with PCF
 {{ banner("the camera (glsl/camera.glsl)") }}
 {{ camera_ray }}
 {{ banner("the light's map") }}
-// Where a point falls in the map: x, y in texels from its top-left corner, and its depth
-// along the light's axis (m). As glsl/raster/shadow_map_depth.vert projects a vertex.
-vec3 map_coordinates(vec3 p)
+// Where a point falls in the map looking along forward: x, y in texels from its top-left
+// corner, and its depth along that axis (m). As glsl/raster/shadow_map_depth.vert projects
+// a vertex.
+vec3 map_coordinates(vec3 p, vec3 right, vec3 up, vec3 forward)
 {
     vec3 offset = p - light_eye;
-    vec3 view = vec3(dot(offset, light_right), dot(offset, light_up),
-                     dot(offset, light_forward));
+    vec3 view = vec3(dot(offset, right), dot(offset, up), dot(offset, forward));
     float w = perspective ? view.z : 1.0;
     float x = ((view.x - light_center.x) / (light_half * w) + 1.0) * map_size / 2.0;
     float y = (1.0 - (view.y - light_center.y) / (light_half * w)) * map_size / 2.0;
     return vec3(x, y, view.z);
+}
+
+// The cube map face a point falls in: its largest coordinate axis k of p - light_eye, face
+// 2 k where that coordinate is positive, 2 k + 1 where negative; on a tie the first axis
+// wins, as numpy's argmax in reference_cpu/shadow_map.py's cube_face.
+int cube_face(vec3 p)
+{
+    vec3 offset = p - light_eye;
+    vec3 a = abs(offset);
+    int axis = (a.x >= a.y && a.x >= a.z) ? 0 : (a.y >= a.z ? 1 : 2);
+    return 2 * axis + (offset[axis] < 0.0 ? 1 : 0);
+}
+
+// The depth a map holds at a texel: the one map's, or a cube face's (GLSL 3.30 indexes an
+// array of samplers only by a constant, so each face is named).
+float stored_depth(int face, ivec2 at)
+{
+    if (face == 1) return texelFetch(shadow_face1, at, 0).r;
+    if (face == 2) return texelFetch(shadow_face2, at, 0).r;
+    if (face == 3) return texelFetch(shadow_face3, at, 0).r;
+    if (face == 4) return texelFetch(shadow_face4, at, 0).r;
+    if (face == 5) return texelFetch(shadow_face5, at, 0).r;
+    return texelFetch(shadow_map, at, 0).r;
 }
 
 // The side (m) of one texel at a depth along the light's axis: the frustum's width there
@@ -69,18 +103,21 @@ void main()
     vec3 to_light = perspective ? normalize(light_eye - p) : -light_forward;
     float cosine = clamp(abs(dot(n, to_light)), 1e-12, 1.0);
     float tilt = min(sqrt(1.0 - cosine * cosine) / cosine, max_tilt);
-    vec3 where = map_coordinates(p);
+    int face = cube ? cube_face(p) : 0;
+    vec3 where = cube ? map_coordinates(p, face_right[face], face_up[face], face_forward[face])
+                      : map_coordinates(p, light_right, light_up, light_forward);
     float allowed = bias + slope_bias * texel_width(where.z) * tilt;
 
     // Percentage-closer filtering (Reeves, Salesin and Cook 1987): the share of the
-    // (2 reach + 1)^2 texels round the point's own that it is no deeper than.
+    // (2 reach + 1)^2 texels round the point's own that it is no deeper than (in a cube,
+    // clamped at the edge of the point's face).
     ivec2 texel = ivec2(floor(where.xy));
     int last = int(map_size) - 1;
     float lit = 0.0;
     for (int dy = -reach; dy <= reach; dy++) {
         for (int dx = -reach; dx <= reach; dx++) {
             ivec2 at = clamp(texel + ivec2(dx, dy), ivec2(0), ivec2(last));
-            float stored = texelFetch(shadow_map, at, 0).r;
+            float stored = stored_depth(face, at);
             lit += where.z <= stored + allowed ? 1.0 : 0.0;
         }
     }
