@@ -179,6 +179,10 @@ def check_mesh_scene(scene: Scene, backend: str) -> None:
         raise MarchlabError(f"render.shading = {scene.render.shading!r} shows the sphere "
                             f"tracer's march, which the {backend} backend does not take (one "
                             f"of: {', '.join(MESH_SHADING)})")
+    if scene.render.shadows == "soft":
+        raise MarchlabError(f"render.shadows = 'soft' is the sphere tracer's penumbra, which "
+                            f"the {backend} backend does not draw: use 'hard' (or "
+                            "shadow_method = 'map' with shadow_pcf > 1 for filtered edges)")
 
 
 def mesh_frame(scene: Scene, meshes: list[TriangleMesh], materials: list, raster: Raster,

@@ -130,6 +130,15 @@ def test_march_steps_view_is_refused_for_meshes(capsys, tmp_path):
     assert "render.shading = 'steps'" in err
 
 
+@pytest.mark.parametrize("backend", ["numpy-raster", "embree"])
+def test_soft_shadows_are_refused_for_meshes_not_drawn_hard(backend, capsys, tmp_path):
+    code, _, err = run_cli(capsys, "render", "meshes", "--set", "render.shadows=soft",
+                           "--backend", backend, "--size", "16x12", "-o", tmp_path / "x.png")
+    assert_one_line_error(code, err)
+    assert "render.shadows = 'soft'" in err and "'hard'" in err
+    assert not (tmp_path / "x.png").exists()
+
+
 def test_mesh_scene_renders_with_the_numpy_rasteriser_by_default(capsys, tmp_path):
     code, out, _ = run_cli(capsys, "render", "meshes", "--size", "32x24", "-o",
                            tmp_path / "m.npz")
