@@ -238,10 +238,19 @@ class Viewer:
 
     def add_object(self, kind: str) -> None:
         """Add a new node of ``kind`` into the selected operator, or else at the top level.
-        A scene of triangle meshes takes no SDF objects: refused, saying so."""
-        if self.history.scene.meshes:
-            raise MarchlabError(f"cannot add a {kind}: this scene is made of triangle meshes, "
-                                "and SDF objects are drawn by the sphere tracer")
+        A scene of triangle meshes takes a top-level mesh node of a procedural kind
+        (`scene_model.editing.add_mesh`) and refuses an SDF object, saying so."""
+        scene = self.history.scene
+        if scene.meshes:
+            if kind not in editing.addable_mesh_kinds():
+                raise MarchlabError(f"cannot add a {kind}: this scene is made of triangle "
+                                    "meshes (add one of: "
+                                    f"{', '.join(editing.addable_mesh_kinds())}), and SDF "
+                                    "objects are drawn by the sphere tracer")
+            scene, index = editing.add_mesh(scene, kind)
+            self.edit(scene, f"add {kind} mesh")
+            self.selection = ("mesh", index)
+            return
         node = editing.default_node(kind)
         try:
             scene, path = editing.add_object(self.history.scene, node, self.selection)
@@ -251,27 +260,32 @@ class Viewer:
         self.selection = path
 
     def duplicate_selected(self) -> None:
-        if self._mesh_selected("duplicated"):
-            return
-        if self.selection is not None:
+        if self._mesh_selected():
+            scene, index = editing.duplicate_mesh(self.history.scene, self.selection[1])
+            self.edit(scene, "duplicate mesh")
+            self.selection = ("mesh", index)
+        elif self.selection is not None:
             scene, path = editing.duplicate(self.history.scene, self.selection)
             self.edit(scene, "duplicate")
             self.selection = path
 
     def delete_selected(self) -> None:
-        if self._mesh_selected("deleted"):
-            return
-        if self.selection is not None:
+        """Delete the selected node; a scene's last mesh stays (saying so)."""
+        if self._mesh_selected():
+            try:
+                scene = editing.delete_mesh(self.history.scene, self.selection[1])
+            except SceneError as err:
+                self.status = f"not deleted: {err}"
+                return
+            self.edit(scene, "delete mesh")
+            self.selection = None
+        elif self.selection is not None:
             self.edit(editing.delete(self.history.scene, self.selection), "delete")
             self.selection = None
 
-    def _mesh_selected(self, done: str) -> bool:
-        """Whether the selection is a mesh node, which the object tools leave alone (saying
-        so): its [[meshes]] table is edited in the panel or the scene file."""
-        if self.selection is not None and self.selection[0] == "mesh":
-            self.status = f"not {done}: meshes are added and removed in the scene file"
-            return True
-        return False
+    def _mesh_selected(self) -> bool:
+        """Whether the selection is a top-level mesh node ``("mesh", i)``."""
+        return self.selection is not None and self.selection[0] == "mesh"
 
     def reparent_selected(self, parent) -> None:
         if self.selection is not None:

@@ -593,10 +593,7 @@ class Window:
         from imgui_bundle import imgui
         viewer = self.viewer
         scene = viewer.history.scene
-        if scene.meshes:
-            imgui.text_disabled("triangle meshes: no SDF objects to add here")
-        else:
-            self._object_tools()
+        self._object_tools()
         if imgui.begin_tab_bar("scene tabs"):
             if scene.meshes and imgui.begin_tab_item("Meshes")[0]:
                 self._meshes_tab(scene)
@@ -612,11 +609,14 @@ class Window:
             imgui.end_tab_bar()
 
     def _object_tools(self) -> None:
-        """Add, duplicate and delete SDF objects (they sit above the tabs, where the test
-        engine finds them by label)."""
+        """Add, duplicate and delete SDF objects, or in a scene of triangle meshes top-level
+        mesh nodes (they sit above the tabs, where the test engine finds them by label)."""
         from imgui_bundle import imgui
         viewer = self.viewer
-        kinds = list(node_kinds())
+        kinds = (editing.addable_mesh_kinds() if viewer.history.scene.meshes
+                 else list(node_kinds()))
+        if self.add_kind not in kinds:          # the other kind of scene was loaded
+            self.add_kind = "cube" if "cube" in kinds else kinds[0]
         imgui.set_next_item_width(110)
         changed, index = imgui.combo("new", kinds.index(self.add_kind), kinds)
         self.add_kind = kinds[index]
@@ -635,7 +635,7 @@ class Window:
         the selected one's fields: position, rotation, scale, material, its own numbers."""
         from imgui_bundle import imgui
         viewer = self.viewer
-        imgui.text_disabled("add or remove meshes in the scene file ([[meshes]])")
+        imgui.text_disabled("add, duplicate and delete meshes with the tools above")
         for i, node in enumerate(scene.meshes):
             label = node.kind + (f" ({node.material})" if getattr(node, "material", None)
                                  else "")

@@ -33,6 +33,7 @@ import re
 from typing import Any
 
 from .bodies import Body
+from .mesh_objects import ProceduralMesh, mesh_kinds
 from .errors import SceneError, format_path
 from .fields import Record, field_types
 from .scene import Light, Material, Scene
@@ -443,6 +444,46 @@ def node_field_path(scene: Scene, path: NodePath, field: str) -> str:
                              _location(scene, path))
         return format_path(steps + [key])
     return format_path(steps + [field])
+
+
+# --- Mesh nodes (scenes of triangle meshes) --------------------------------------------------
+
+def addable_mesh_kinds() -> list[str]:
+    """The mesh node types an editor can add with their defaults: the procedural ones (an
+    OBJ model needs a file, a group children)."""
+    return [kind for kind, cls in mesh_kinds().items() if issubclass(cls, ProceduralMesh)]
+
+
+def add_mesh(scene: Scene, kind: str) -> tuple[Scene, int]:
+    """A top-level mesh node of procedural ``kind`` with its defaults, at the origin, in the
+    material "default" (or the scene's first, where it has none so named), appended;
+    returns the new scene and the node's index."""
+    kinds = addable_mesh_kinds()
+    if kind not in kinds:
+        raise SceneError(f"unknown mesh type {kind!r} to add (one of: {', '.join(kinds)})")
+    material = "default" if "default" in scene.materials or not scene.materials \
+        else next(iter(scene.materials))
+    node = mesh_kinds()[kind](material=material)
+    return dataclasses.replace(scene, meshes=scene.meshes + (node,)), len(scene.meshes)
+
+
+def duplicate_mesh(scene: Scene, index: int) -> tuple[Scene, int]:
+    """A copy of top-level mesh node ``index`` (its children too) right after it, moved by
+    `DUPLICATE_OFFSET`; returns the new scene and the copy's index."""
+    node = scene.meshes[_index(scene.meshes, index, ("meshes",))]
+    copy = dataclasses.replace(node, position=tuple(
+        a + b for a, b in zip(node.position, DUPLICATE_OFFSET)))
+    meshes = scene.meshes[:index + 1] + (copy,) + scene.meshes[index + 1:]
+    return dataclasses.replace(scene, meshes=meshes), index + 1
+
+
+def delete_mesh(scene: Scene, index: int) -> Scene:
+    """``scene`` without top-level mesh node ``index``. The last one stays: without meshes
+    the scene would no longer be one of triangle meshes."""
+    _index(scene.meshes, index, ("meshes",))
+    if len(scene.meshes) == 1:
+        raise SceneError("a scene of triangle meshes keeps at least one mesh", ("meshes",))
+    return dataclasses.replace(scene, meshes=scene.meshes[:index] + scene.meshes[index + 1:])
 
 
 # --- Lights and materials --------------------------------------------------------------------

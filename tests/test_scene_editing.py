@@ -21,11 +21,13 @@ from reference_cpu.scene_sdf import build_scene_sdf
 from scene_model.bodies import Body
 from scene_model.camera import camera_rays
 from scene_model.editing import (DUPLICATE_OFFSET, History, add_light, add_material,
+                                 add_mesh, addable_mesh_kinds, delete_mesh, duplicate_mesh,
                                  add_object, default_node, delete, delete_light,
                                  delete_material, duplicate, get_field, node_at,
                                  node_field_path, object_path, primitive_ids, primitive_path,
                                  replace_node, reparent, set_field)
 from scene_model.errors import SceneError
+from scene_model.mesh_world import scene_meshes
 from scene_model.scene import Camera, Material, Scene, scene_objects
 from scene_model.scenefile import bundled_scene_names, load_scene, scene_to_toml
 from scene_model.shapes import (Box, Plane, Primitive, Rotate, Scale, SmoothUnion, Sphere,
@@ -590,3 +592,50 @@ def test_scene_edited_by_every_operation_comes_back_from_its_file(name, tmp_path
     scene = set_field(scene, "objects[0].scale", 1.5)      # wraps objects[0] in a scale node
     scene = set_field(scene, "render.fog.density", 0.125)
     assert round_trip(scene, tmp_path) == scene
+
+
+# --- Mesh nodes ------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("kind", addable_mesh_kinds())
+def test_an_added_mesh_of_each_procedural_kind_is_drawn_and_saved(kind, tmp_path):
+    scene = load_scene("meshes")
+    edited, index = add_mesh(scene, kind)
+    assert index == len(scene.meshes) and edited.meshes[:index] == scene.meshes
+    assert edited.meshes[index].kind == kind
+    meshes, _ = scene_meshes(edited)
+    assert len(meshes) == len(scene_meshes(scene)[0]) + 1 and len(meshes[-1].triangles) > 0
+    assert round_trip(edited, tmp_path).meshes == edited.meshes
+
+
+def test_a_mesh_takes_the_scenes_first_material_where_none_is_called_default():
+    scene = load_scene("museum")
+    assert "default" not in scene.materials
+    edited, index = add_mesh(scene, "cube")
+    assert edited.meshes[index].material == next(iter(scene.materials))
+
+
+def test_an_obj_model_a_group_and_an_unknown_kind_are_not_added_with_defaults():
+    for kind in ("obj", "group", "sphere"):
+        with pytest.raises(SceneError, match="unknown mesh type"):
+            add_mesh(load_scene("meshes"), kind)
+
+
+def test_a_duplicated_mesh_node_follows_its_original_moved_with_its_children():
+    scene = load_scene("museum")
+    index = next(i for i, node in enumerate(scene.meshes) if node.children)
+    edited, copy = duplicate_mesh(scene, index)
+    original, duplicate = edited.meshes[index], edited.meshes[copy]
+    assert copy == index + 1 and duplicate.children == original.children
+    assert duplicate.position == tuple(a + b for a, b in zip(original.position,
+                                                             DUPLICATE_OFFSET))
+    assert edited.meshes[:copy] + edited.meshes[copy + 1:] == scene.meshes
+
+
+def test_deleting_meshes_stops_at_the_last_one():
+    scene = load_scene("meshes")
+    while len(scene.meshes) > 1:
+        scene = delete_mesh(scene, 0)
+    with pytest.raises(SceneError, match="at least one mesh"):
+        delete_mesh(scene, 0)
+    with pytest.raises(SceneError, match="no such entry"):
+        delete_mesh(scene, 3)

@@ -28,6 +28,7 @@ from scene_model.timeline import scene_at_time
 
 SIZE = (160, 120)
 CHECK_SIZE = (340, 240)     # room for the Render panel's button (as window_checks.py's)
+PANEL_SIZE = (780, 560)     # room for the panels (as window_checks.py's)
 WAIT_SECONDS = 30
 
 
@@ -140,6 +141,41 @@ def reference_check(out: Path) -> None:
     _state(out, failures=viewer.check.failures, reference=viewer.check.reference_backend)
 
 
+def tools(out: Path) -> None:
+    """The object tools on "meshes": pick "torus" in the "new" list, Add, then Delete what
+    the Add selected, then Add again; the scene's mesh kinds after each, and the picture."""
+    from marchlab.view_window import run
+    Window, _ = _window_classes()
+    viewer = Viewer("meshes", PANEL_SIZE)
+    window = Window(viewer)
+    seen, shots = {}, {}
+
+    def take():
+        shots["image"] = window.drawer.image(viewer)
+
+    def kinds():
+        return [node.kind for node in viewer.history.scene.meshes]
+
+    def drive(ctx):
+        ctx.set_ref("//Scene")
+        seen["before"] = kinds()
+        ctx.combo_click("new/torus")
+        ctx.item_click("Add")
+        seen["after add"], seen["selection"] = kinds(), list(viewer.selection)
+        ctx.item_click("Delete")
+        seen["after delete"] = kinds()
+        ctx.item_click("Add")
+        ctx.yield_(3)
+        window.on_gl_thread(take)
+        ctx.yield_(2)
+        seen["at the end"] = kinds()
+
+    run(window, PANEL_SIZE, test=drive)
+    viewer.save(out / "edited.toml")
+    np.savez(out / "result.npz", **shots)
+    _state(out, **seen)
+
+
 def _yield_until(ctx, done) -> None:
     deadline = time.monotonic() + WAIT_SECONDS
     while not done() and time.monotonic() < deadline:
@@ -204,6 +240,20 @@ def test_a_click_selects_the_mesh_under_the_cursor_and_a_drag_orbits(window, tmp
     expected = raster_image(_moved(scene, state["camera after"]))
     assert np.abs(arrays["after"].astype(int) - expected).max() <= 1
     assert np.abs(arrays["after"].astype(int) - arrays["before"]).max() > 1
+
+
+def test_the_object_tools_add_and_delete_meshes_in_the_window(window, tmp_path):
+    arrays, state = in_window("tools", tmp_path)
+    before = state["before"]
+    assert state["after add"] == before + ["torus"] and state["selection"] == ["mesh", 4]
+    assert state["after delete"] == before and state["at the end"] == before + ["torus"]
+    edited = load_scene(tmp_path / "edited.toml")
+    assert [node.kind for node in edited.meshes] == before + ["torus"]
+    # The window shows the scene with its torus, as `marchlab render --backend raster` does.
+    expected = raster_image(edited, PANEL_SIZE)
+    assert np.abs(arrays["image"].astype(int) - expected).max() <= 1
+    assert np.abs(expected.astype(int) - raster_image(load_scene("meshes"),
+                                                      PANEL_SIZE)).max() > 1
 
 
 def test_the_museums_mobile_turns_in_the_window_as_the_scene_at_that_time(window, tmp_path):
@@ -305,11 +355,40 @@ def test_sdf_tools_refuse_a_mesh_scene_in_one_line():
     viewer = Viewer("meshes", SIZE)
     with pytest.raises(MarchlabError, match="SDF objects"):
         viewer.probe_pixel(10, 10)
-    with pytest.raises(MarchlabError, match="triangle meshes"):
+    with pytest.raises(MarchlabError, match="triangle meshes.*uv_sphere"):
         viewer.add_object("sphere")
+    assert len(viewer.history.scene.meshes) == 4
+
+
+def test_the_object_tools_add_duplicate_and_delete_meshes_each_one_undo_step():
+    viewer = Viewer("meshes", SIZE)
+    original = viewer.history.scene.meshes
+    viewer.add_object("torus")
+    assert viewer.selection == ("mesh", 4) and viewer.history.scene.meshes[4].kind == "torus"
+    # The new mesh is drawn: its object id is the scene's last.
+    assert mesh_ids(viewer.history.scene, 4) == (len(scene_meshes(viewer.history.scene)[0]) - 1,)
+    viewer.select(("mesh", 1))
+    viewer.duplicate_selected()
+    meshes = viewer.history.scene.meshes
+    assert viewer.selection == ("mesh", 2) and len(meshes) == 6
+    assert meshes[2].position == tuple(a + b for a, b in zip(meshes[1].position,
+                                                              (0.5, 0.0, 0.0)))
+    viewer.delete_selected()
+    assert viewer.selection is None and viewer.history.scene.meshes[:4] == original
+    for _ in range(3):
+        viewer.undo()
+    assert viewer.history.scene.meshes == original
+
+
+def test_a_mesh_scene_keeps_its_last_mesh():
+    viewer = Viewer("meshes", SIZE)
+    for _ in range(3):
+        viewer.select(("mesh", 0))
+        viewer.delete_selected()
+    assert len(viewer.history.scene.meshes) == 1
     viewer.select(("mesh", 0))
     viewer.delete_selected()
-    assert len(viewer.history.scene.meshes) == 4 and "scene file" in viewer.status
+    assert len(viewer.history.scene.meshes) == 1 and "at least one mesh" in viewer.status
 
 
 if __name__ == "__main__":
