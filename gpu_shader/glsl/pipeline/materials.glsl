@@ -1,4 +1,5 @@
 {# A template: gpu_shader/generate.py fills in the {{ }} and {% %} parts for one scene (Jinja). #}
+{% import "pipeline/albedo.glsl" as albedo %}
 // Each object's material, by object id: the rows that follow the fixed parameters in U.
 // Row 0: (color, ka); row 1: (kd, ks, shininess, kr){% if checker %}; row 2: (checker color_a, scale);
 // row 3: (checker color_b, 1 if checkered){% endif %}{% if glass_row is not none %}; row {{ glass_row }}: (absorption, transparency);
@@ -9,28 +10,10 @@
 
 // The albedo at p, with unit normal n, of the object hit: its colour{% if checker %}, or its checkerboard{% endif %}{% if texture_row is not none %}, or its
 // texture times the tint{% endif %}.
-vec3 surface_albedo(vec3 p, vec3 n, int id)
-{
-{% if checker %}
-    if (MATERIAL(id, 3).w > 0.0) {
-        return checker(p, MATERIAL(id, 2).xyz, MATERIAL(id, 3).xyz, MATERIAL(id, 2).w);
-    }
-{% endif %}
-{% if texture_row is not none %}
-{% set T = texture_row %}
-{% set calls = {"triplanar": "texture_triplanar(p, n, MATERIAL(id, %d), MATERIAL(id, %d).w, MATERIAL(id, %d).y)" % (T, T + 1, T + 2),
-                "cube": "texture_cube(p, n, MATERIAL(id, %d), MATERIAL(id, %d).w)" % (T, T + 1),
-                "sphere": "texture_sphere(n, MATERIAL(id, %d))" % T} %}
-    real mapping = MATERIAL(id, {{ T + 2 }}).x;
-{% for name, code in mappings.items() %}
-    if (mapping == {{ "%d.0" % code }}) {
-        return MATERIAL(id, {{ T + 1 }}).xyz * {{ calls[name] }};
-    }
-{% endfor %}
-{% endif %}
-    return MATERIAL(id, 0).xyz;
-}
-{% if checker and path_labels %}
+{{ albedo.surface_albedo(checker, texture_row, mappings, {
+       "triplanar": "texture_triplanar(p, n, MATERIAL(id, %(T)d), MATERIAL(id, %(T1)d).w, MATERIAL(id, %(T2)d).y)",
+       "cube": "texture_cube(p, n, MATERIAL(id, %(T)d), MATERIAL(id, %(T1)d).w)",
+       "sphere": "texture_sphere(n, MATERIAL(id, %(T)d))"}) }}{% if checker and path_labels %}
 
 // The checker cell's parity at p (0 where the material has no checkerboard): a feature of
 // the path label.

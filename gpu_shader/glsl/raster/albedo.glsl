@@ -1,5 +1,6 @@
 {# A template: gpu_shader/raster_shaders.py (lit_shaders) fills it in (Jinja). The raster twin of #}
 {# glsl/pipeline/materials.glsl: the same material rows, and a mesh's own texture coordinates. #}
+{% import "pipeline/albedo.glsl" as albedo %}
 {% if "uv" in mappings %}
 // A texture at a mesh's texture coordinates uv, repeated every `scale` in u and v: a mesh's
 // (0, 0) is its texture's bottom left (scene_model/meshes.py), an image's its top left, so
@@ -23,23 +24,6 @@ vec3 texture_uv(vec4 image, vec2 uv, real scale)
 {% if "uv" in mappings %}
 // A uv texture reads v_uv, the fragment's interpolated texture coordinates (mesh.frag).
 {% endif %}
-vec3 surface_albedo(vec3 p, vec3 n, int id)
-{
-{% if checker %}
-    if (MATERIAL(id, 3).w > 0.0) {
-        return checker(p, MATERIAL(id, 2).xyz, MATERIAL(id, 3).xyz, MATERIAL(id, 2).w);
-    }
-{% endif %}
-{% if texture_row is not none %}
-{% set T = texture_row %}
-{% set calls = {"triplanar": "texture_triplanar(p, n, MATERIAL(id, %d), MATERIAL(id, %d).w, MATERIAL(id, %d).y)" % (T, T + 1, T + 2),
-                "uv": "texture_uv(MATERIAL(id, %d), v_uv, MATERIAL(id, %d).w)" % (T, T + 1)} %}
-    real mapping = MATERIAL(id, {{ T + 2 }}).x;
-{% for name, code in mappings.items() %}
-    if (mapping == {{ "%d.0" % code }}) {
-        return MATERIAL(id, {{ T + 1 }}).xyz * {{ calls[name] }};
-    }
-{% endfor %}
-{% endif %}
-    return MATERIAL(id, 0).xyz;
-}
+{{ albedo.surface_albedo(checker, texture_row, mappings, {
+       "triplanar": "texture_triplanar(p, n, MATERIAL(id, %(T)d), MATERIAL(id, %(T1)d).w, MATERIAL(id, %(T2)d).y)",
+       "uv": "texture_uv(MATERIAL(id, %(T)d), v_uv, MATERIAL(id, %(T1)d).w)"}) }}
