@@ -257,6 +257,14 @@ def barycentric(p, a, b, c):
     w_b = np.sum(np.cross(a - c, p - c) * n, axis=1) / whole
     return np.stack([w_a, w_b, 1 - w_a - w_b], axis=-1)
 
+
+def cube_face(directions):
+    # directions : (N, 3) from the light. Return the (N,) face: 0 +x, 1 -x, 2 +y, 3 -y, 4 +z, 5 -z.
+    # The face a direction leans towards most: its largest coordinate in size, with its sign.
+    axis = np.argmax(np.abs(directions), axis=1)
+    negative = directions[np.arange(len(directions)), axis] < 0
+    return 2 * axis + negative
+
 SOLUTIONS = {name: function for name, function in list(globals().items())
              if inspect.isfunction(function) and not name.startswith("_")
              and function.__module__ == __name__}

@@ -1,5 +1,5 @@
-"""Checks for lesson 09's rasteriser: the edge function, perspective-correct interpolation and
-barycentric coordinates in space.
+"""Checks for lesson 09's rasteriser: the edge function, perspective-correct interpolation,
+barycentric coordinates in space and a cube map's face.
 
 - ``edge_function`` is compared with `reference_cpu.rasterise.edge`, on points inside,
   outside and exactly on edges, in floating point and in the rasteriser's fixed point.
@@ -10,6 +10,10 @@ barycentric coordinates in space.
   two agree on the rasteriser's own weights).
 - ``barycentric`` is compared with `reference_cpu.truth.mesh_cast.barycentric`, the ray
   caster's weights, on points inside and outside triangles placed anyhow in space.
+- ``cube_face`` (which of a cube shadow map's six faces a direction from the light falls in)
+  is compared with `reference_cpu.shadow_map.cube_face`, on random directions and on ones
+  close to each axis and to the cube's edges (never exactly on them, where either face is
+  right).
 
 How a student's function is judged is in `marchlab.check.judge`.
 """
@@ -21,13 +25,14 @@ from typing import Callable
 import numpy as np
 
 from reference_cpu.rasterise import SUBPIXELS, edge
+from reference_cpu.shadow_map import cube_face as _cube_face_from
 from reference_cpu.truth.mesh_cast import barycentric as _barycentric
 from scene_model.geometry import dot
 
 from .judge import CASES, SAMPLES, compare, unit_vectors
 from .result import CheckResult
 
-__all__ = ["edge_function", "perspective_correct", "barycentric"]
+__all__ = ["edge_function", "perspective_correct", "barycentric", "cube_face"]
 
 DEPTHS = (0.2, 50.0)       # view depths z of the corners (m): near the eye to far away
 
@@ -222,3 +227,64 @@ def barycentric(student: Callable, seed: int = 0) -> CheckResult:
          "of it)."),
     ]
     return compare("barycentric", student, _barycentric, cases, mistakes)
+
+
+# --- cube_face -------------------------------------------------------------------------------
+
+def reference_cube_face(directions):
+    """(N,) the face of each of ``directions`` (N, 3), seen from the origin, in
+    `reference_cpu.shadow_map.cube_face`'s order +x, -x, +y, -y, +z, -z."""
+    return _cube_face_from(directions, np.zeros(3))
+
+
+def _direction_cases(rng, n=SAMPLES):
+    """(directions,): random ones, half of them tilted a little off an axis or off an edge of
+    the cube (two coordinates equal in size), so that a face decided by the wrong rule shows,
+    but none exactly on an edge."""
+    d = unit_vectors(rng, n) * rng.uniform(0.1, 10.0, (n, 1))
+    near_axis = np.arange(n) % 4 == 1
+    axis = rng.integers(0, 3, near_axis.sum())
+    d[near_axis] *= 0.2
+    d[near_axis, axis] = rng.choice([-1.0, 1.0], near_axis.sum()) * rng.uniform(1, 5,
+                                                                                near_axis.sum())
+    rows = np.nonzero(np.arange(n) % 4 == 2)[0]             # near an edge of the cube
+    first = rng.integers(0, 3, len(rows))
+    second = (first + rng.integers(1, 3, len(rows))) % 3
+    size = rng.uniform(1, 5, len(rows))
+    d[rows] *= 0.1
+    d[rows, first] = rng.choice([-1.0, 1.0], len(rows)) * size
+    d[rows, second] = rng.choice([-1.0, 1.0], len(rows)) * size * rng.choice([0.99, 1.01],
+                                                                             len(rows))
+    return (d,)
+
+
+def _faces(d, order, largest=True, signed_axis=False, negative_even=False):
+    """Faces by a rule: the largest (or smallest) coordinate's axis, compared by size or by
+    signed value, numbered in ``order`` (a function of axis and sign)."""
+    size = d if signed_axis else np.abs(d)
+    axis = np.argmax(size, axis=1) if largest else np.argmin(size, axis=1)
+    negative = np.take_along_axis(d, axis[:, None], axis=1)[:, 0] < 0
+    return order(axis, negative != negative_even)
+
+
+def cube_face(student: Callable, seed: int = 0) -> CheckResult:
+    """Check ``student(directions)`` ((N, 3) directions from the light, not unit) -> (N,)
+    the cube map face each falls in: 0 +x, 1 -x, 2 +y, 3 -y, 4 +z, 5 -z."""
+    rng = np.random.default_rng(seed)
+    cases = [_direction_cases(rng) for _ in range(CASES)]
+    paired = lambda axis, negative: 2 * axis + negative
+    order = "faces are numbered +x, -x, +y, -y, +z, -z: face 2 k for a positive coordinate " \
+        "on axis k, 2 k + 1 for a negative one"
+    mistakes = [
+        (lambda d: _faces(d, paired, signed_axis=True),
+         "compare the coordinates' sizes |x|, |y|, |z|, not their signed values: (-5, 1, 0) "
+         "leans towards -x, the face its largest size points to."),
+        (lambda d: _faces(d, paired, largest=False),
+         "the face is the one the direction leans towards most: the largest coordinate in "
+         "size, not the smallest (a 90-degree frustum holds the directions whose largest "
+         "coordinate is its axis's)."),
+        (lambda d: _faces(d, paired, negative_even=True), order + " (+x is face 0)."),
+        (lambda d: _faces(d, lambda axis, negative: axis + 3 * negative), order + "; yours "
+         "are numbered +x, +y, +z, -x, -y, -z."),
+    ]
+    return compare("cube_face", student, reference_cube_face, cases, mistakes)

@@ -14,12 +14,14 @@ import pytest
 
 from marchlab import check
 from marchlab.check import graphics, physics, raster
-from marchlab.check.raster import _areas, _edge_cases, _triangle_cases, ray_cast_attribute
+from marchlab.check.raster import (_areas, _direction_cases, _edge_cases, _faces,
+                                   _triangle_cases, ray_cast_attribute, reference_cube_face)
 from reference_cpu.rasterise import SUBPIXELS, draw_triangle, edge
 from reference_cpu.truth.mesh_cast import barycentric
 
 REFERENCES = {"edge_function": edge, "perspective_correct": ray_cast_attribute,
-              "barycentric": barycentric}
+              "barycentric": barycentric, "cube_face": reference_cube_face}
+PAIRED = lambda axis, negative: 2 * axis + negative    # noqa: E731  (the faces' numbering)
 
 
 def affine(w, z, a):
@@ -55,6 +57,11 @@ WRONG = [
     ("barycentric", lambda p, a, b, c: _areas(p, a, b, c, total=np.ones(len(p))),
      "divide by the area of the whole triangle"),
     ("barycentric", lambda p, a, b, c: _areas(p, a, b, c) / 2, "measured the same way"),
+    ("cube_face", lambda d: _faces(d, PAIRED, signed_axis=True), "not their signed values"),
+    ("cube_face", lambda d: _faces(d, PAIRED, largest=False), "not the smallest"),
+    ("cube_face", lambda d: _faces(d, PAIRED, negative_even=True), "(+x is face 0)"),
+    ("cube_face", lambda d: _faces(d, lambda axis, negative: axis + 3 * negative),
+     "yours are numbered +x, +y, +z, -x, -y, -z"),
 ]
 
 
@@ -129,8 +136,15 @@ def test_correct_rewrites_pass_within_the_tolerance():
                          for i in range(len(p))])
         return np.column_stack([1 - w_bc.sum(axis=1), w_bc])
 
+    def by_comparisons(d):
+        # The face by comparing sizes two at a time, and the sign by a choice: no argmax.
+        x, y, z = np.abs(d).T
+        axis = np.where((x >= y) & (x >= z), 0, np.where(y >= z, 1, 2))
+        return np.choose(axis, [np.where(d[:, 0] < 0, 1, 0), np.where(d[:, 1] < 0, 3, 2),
+                                np.where(d[:, 2] < 0, 5, 4)])
+
     for name, function in (("edge_function", edge_cross), ("perspective_correct", depth_first),
-                           ("barycentric", solved)):
+                           ("barycentric", solved), ("cube_face", by_comparisons)):
         result = run(name, function)
         assert result.passed and result.max_error <= graphics.TOLERANCE, name
 
@@ -184,3 +198,12 @@ def test_barycentric_cases_are_on_their_planes_half_of_them_outside():
     outside = (w < 0).any(axis=1)
     assert outside.sum() == len(p) // 2
     np.testing.assert_allclose(w.sum(axis=1), 1, atol=1e-12)
+
+
+def test_direction_cases_lean_towards_every_face_and_near_the_cubes_edges_but_never_on_them():
+    (d,) = _direction_cases(np.random.default_rng(0))
+    faces = reference_cube_face(d)
+    assert set(np.unique(faces)) == set(range(6))
+    size = np.sort(np.abs(d), axis=1)
+    ratio = size[:, 1] / size[:, 2]                   # second largest over largest
+    assert np.sum(ratio > 0.98) >= len(d) // 8 and ratio.max() < 1.0
