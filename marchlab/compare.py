@@ -27,11 +27,12 @@ labels each figure a gate (with its limit) or a trend, as ``marchlab compare`` p
 from __future__ import annotations
 
 import io
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, fields, replace
 from pathlib import Path
 
 import numpy as np
 
+from scene_model.camera import turned
 from scene_model.files import write_together
 from scene_model.frame import Frame
 from scene_model.geometry import angle_between
@@ -231,19 +232,19 @@ def reference_around(scene, width: int, height: int, backend: str, subpixel: flo
                      precision: str | None = None) -> tuple[Frame, ...]:
     """The reference drawn four more times, its camera turned (`scene_model.camera.turned`)
     by (+-2 s, +-2 s) pixels, s = ``subpixel``, for a candidate that samples each pixel up
-    to s pixels from its centre along each axis (`Frame.subpixel`): at every pixel the four
-    turned samples enclose the square of side 2 s about the centre (a turn moves a point
-    off the axis by more than it moves the centre, and a little across; tests/test_camera.py
-    measures it), so a surface that changes in one direction across that square shows
-    ``b`` no value outside the range they and the centre's span. Empty for s = 0."""
+    to s pixels from its centre along each axis (`Frame.subpixel`).
+
+    At every pixel the four turned samples enclose the square of side 2 s about the centre
+    (a turn moves a point off the axis by more than it moves the centre, and a little
+    across; tests/test_subpixel_compare.py checks the enclosure), so where the surface
+    changes one way across that square, whatever the candidate samples in it lies within
+    the range the centre's and the turned samples' values span. Empty for s = 0."""
     if subpixel <= 0:
         return ()
-    import dataclasses
-    from scene_model.camera import turned
-    from .render import render
+    from .render import render                    # the backends, only when needed
     turn = 2 * subpixel
     return tuple(
-        render(dataclasses.replace(scene, camera=turned(scene.camera, dx, dy, width, height)),
+        render(replace(scene, camera=turned(scene.camera, dx, dy, width, height)),
                width, height, backend=backend, precision=precision, path_labels=True)
         for dx in (-turn, turn) for dy in (-turn, turn))
 
