@@ -30,7 +30,7 @@ from functools import cache
 import numpy as np
 
 from reference_cpu.rasterise import NEAR
-from reference_cpu.shadow_map import MAX_TILT, LightView, light_views
+from reference_cpu.shadow_map import CUBE_FACES, MAX_TILT, LightView, light_views
 from scene_model.camera import Camera, camera_basis
 from scene_model.meshes import TriangleMesh
 
@@ -41,7 +41,6 @@ from .raster import FAR, _set_camera
 
 MAP_UNIT = 0            # the texture unit the lookup reads the map from (a cube's faces
                         # from this unit and the five after it)
-CUBE_FACES = 6
 
 
 def shadow_map_textures(ctx, meshes: list[TriangleMesh], lights, camera: Camera, width: int,

@@ -50,6 +50,11 @@ CUBE_AXES = ((1.0, 0.0, 0.0), (-1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, -1.0, 0.0
              (0.0, 0.0, 1.0), (0.0, 0.0, -1.0))
 CUBE_UPS = ((0.0, 1.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, -1.0), (0.0, 0.0, 1.0),
             (0.0, 1.0, 0.0), (0.0, 1.0, 0.0))
+CUBE_FACES = len(CUBE_AXES)
+
+
+class NeedsCubeMap(ValueError):
+    """A point or spot light whose scene one perspective frustum cannot hold."""
 
 
 @dataclass(frozen=True)
@@ -97,12 +102,12 @@ def light_view(meshes: list[TriangleMesh], light, size: int) -> LightView:
     frame = _basis(axis)
     view = (points - eye) @ frame.T
     if np.any(view[:, 2] <= 0):
-        raise ValueError("a perspective shadow map needs the whole scene in front of the "
-                         "light; this light is among the objects (it needs a cube map)")
+        raise NeedsCubeMap("a perspective shadow map needs the whole scene in front of the "
+                           "light; this light is among the objects (it needs a cube map)")
     # The square frustum must hold every vertex: tan(fov / 2) >= |x| / z and |y| / z.
     half = math.degrees(math.atan(float(np.max(np.abs(view[:, :2]) / view[:, 2:]))))
     if half > MAX_HALF_ANGLE:
-        raise ValueError(f"the scene spans {2 * half:.0f} degrees from the light; a "
+        raise NeedsCubeMap(f"the scene spans {2 * half:.0f} degrees from the light; a "
                          f"perspective shadow map covers at most {2 * MAX_HALF_ANGLE:.0f}")
     camera = Camera(position=tuple(eye), look_at=tuple(eye + axis), up=tuple(frame[1]),
                     fov=2 * half * (1 + 1e-6))
@@ -115,9 +120,7 @@ def light_views(meshes: list[TriangleMesh], light, size: int) -> list[LightView]
     cube map (`cube_views`)."""
     try:
         return [light_view(meshes, light, size)]
-    except ValueError:
-        if isinstance(light, DirectionalLight):
-            raise
+    except NeedsCubeMap:
         return cube_views(light.position, size)
 
 
@@ -240,7 +243,7 @@ def shadow_map_visibility(meshes: list[TriangleMesh], raster: Raster, camera: Ca
     tilt = np.minimum(np.sqrt(1 - cosine ** 2) / cosine, MAX_TILT)
     # One map, or each point in its cube face's; the filter stays inside the face (its
     # texels clamped at the face's edge, as the GPU's lookup clamps them).
-    face = (cube_face(points, light.position) if len(views) == 6
+    face = (cube_face(points, light.position) if len(views) == CUBE_FACES
             else np.zeros(len(points), np.int64))
     lit = np.zeros(len(points))
     for k, view in enumerate(views):
