@@ -108,7 +108,7 @@ def light_view(meshes: list[TriangleMesh], light, size: int) -> LightView:
     half = math.degrees(math.atan(float(np.max(np.abs(view[:, :2]) / view[:, 2:]))))
     if half > MAX_HALF_ANGLE:
         raise NeedsCubeMap(f"the scene spans {2 * half:.0f} degrees from the light; a "
-                         f"perspective shadow map covers at most {2 * MAX_HALF_ANGLE:.0f}")
+                           f"perspective shadow map covers at most {2 * MAX_HALF_ANGLE:.0f}")
     camera = Camera(position=tuple(eye), look_at=tuple(eye + axis), up=tuple(frame[1]),
                     fov=2 * half * (1 + 1e-6))
     return LightView(size, camera=camera)
