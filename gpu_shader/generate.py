@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from reference_cpu.cone_prepass import CONE_SLACK, MIN_PROGRESS, tile_grid
-from reference_cpu.culling import culled_bounds
+from reference_cpu.culling import object_bits
 from reference_cpu.normals import STENCILS
 from reference_cpu.refraction import LABEL_WEIGHT, MIN_RAY_WEIGHT
 from reference_cpu.relaxation import SLOPE_WEIGHT
@@ -237,6 +237,9 @@ class _Generator:
         pairs = (PAIR_SHADOW_RAYS and pair_shadow_rays and self.s.shading in LIT_MODES
                  and self.s.shadows == "hard" and self.s.relaxation == "none")
         self.paired_lights = lights - lights % 2 if pairs else 0
+        # Hard shadow rays leave out the convex object they start on (glsl/march.glsl).
+        self.skip_own = (self.s.shadow_skip_own and self.s.shadows == "hard"
+                         and self.s.shading in LIT_MODES and lights > 0)
         self.lone_shadows = self.paired_lights < lights
 
     def program(self, width: int, height: int) -> Program:
@@ -275,13 +278,17 @@ class _Generator:
         """The program's functions as (section title, text) pairs in reading order, all but
         the entry point, and the number of parameter rows read with fixed indices."""
         self.settings_rows(width, height)
-        bounds = None
         if self.s.bounding_spheres:
             self.features.add("bounding_spheres")
-            bounds = culled_bounds(self.scene.objects, self.s.epsilon)
-        sdf_source, sdf_used = scene_sdf_code(self.scene.objects, self.block, bounds)
+        if self.skip_own:
+            self.features.add("shadows:skip_own")
+        bits = object_bits(self.scene.objects, self.s.epsilon, self.s.bounding_spheres,
+                           self.skip_own)
+        sdf_source, sdf_used = scene_sdf_code(self.scene.objects, self.block, bits,
+                                              own=self.skip_own)
         self.features |= sdf_used
-        culling = self.d.library("culling").select(["ray_meets_sphere"]) if bounds else ""
+        culling = (self.d.library("culling").select(["ray_meets_sphere"])
+                   if any(centre is not None for _, centre, _ in bits) else "")
         parts = [
             (f"the SDF building blocks used by this scene ({self.file('sdf')})",
              self.d.library("sdf").select(sdf_used)),
@@ -486,6 +493,7 @@ class _Generator:
         # One shade_<model> per lit model, the shadow helpers with the first.
         source = "\n".join(
             self.template("shade", lights=lights, shadows=self.s.shadows, helpers=i == 0,
+                          skip_own=self.skip_own,
                           paired=self.paired_lights, features=self.pattern_features(),
                           model=m)
             for i, m in enumerate(lit))

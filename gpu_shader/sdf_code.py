@@ -19,6 +19,8 @@ from scene_model.shapes import (Box, CappedCylinder, Capsule, Cone, Disk, HexPri
                                 SmoothIntersection, SmoothSubtraction, SmoothUnion, Sphere,
                                 Subtraction, Torus, Translate, Union, scene_union)
 
+from reference_cpu.culling import own_objects
+
 from .parameters import ParameterBlock
 
 # Binary operators: (library function, the field of its number (k, t) or None, condition
@@ -188,27 +190,50 @@ class SdfWriter:
         return result, result_id
 
 
-def scene_sdf_code(objects, block: ParameterBlock, bounds=None) -> tuple[str, set[str]]:
+def scene_sdf_code(objects, block: ParameterBlock, bits=None,
+                   own: bool = False) -> tuple[str, set[str]]:
     """Source of ``scene_sdf``, ``scene_object_id`` and the marches' ``ray_objects`` and
     ``march_sdf``, and the library functions they use.
 
-    ``bounds``, the list of `reference_cpu.culling.culled_bounds`, turns on bounding-sphere
-    culling; None writes a ``march_sdf`` that is ``scene_sdf``. (A packet program derives
-    its own from this code: gpu_shader/packets.py.)
+    ``bits``, the list of `reference_cpu.culling.object_bits`, gives the objects a march may
+    leave out a bit each (bounding-sphere culling, shadow rays' own objects); None writes a
+    ``march_sdf`` that is ``scene_sdf``. With ``own`` it also writes ``own_object``, each
+    primitive's own object's bit, which its hard shadow rays leave out. (A packet program
+    derives its own from this code: gpu_shader/packets.py.)
     """
     root = scene_root(objects)
     if root is None:
         return ("// An empty scene: every ray misses.\n"
                 "real scene_sdf(vec3 p)\n{\n    return MAX_DISTANCE * 2.0;\n}\n\n"
                 "int scene_object_id(vec3 p)\n{\n    return -1;\n}\n\n"
-                + _unculled_march_sdf()), set()
+                + (_own_object(objects, []) if own else "") + _unculled_march_sdf()), set()
     source, used, rows = sdf_functions(root, block)
-    if bounds is None:
+    if own:
+        source += _own_object(objects, bits or [])
+    if not bits:
         return source + _unculled_march_sdf(), used
     # The union node of several objects allocated the first (empty) entry of the walk.
     replay = rows[1:] if len(objects) > 1 else rows
-    culled, culled_used = _culled_march_sdf(objects, block, bounds, replay)
+    culled, culled_used = _culled_march_sdf(objects, block, bits, replay)
     return source + culled, used | culled_used
+
+
+def _own_object(objects, bits) -> str:
+    """``own_object(id)``: the bit of the convex object primitive id belongs to, as
+    `reference_cpu.culling.own_objects` finds it, or 0u."""
+    owner = own_objects(objects, bits)
+    bit = {index: 1 << k for k, (index, _, _) in enumerate(bits)}
+    tests = []
+    for index in sorted(set(owner[owner >= 0].tolist())):
+        ids = np.flatnonzero(owner == index)
+        first, last = int(ids[0]), int(ids[-1])
+        condition = f"id == {first}" if first == last else f"id >= {first} && id <= {last}"
+        tests.append(f"    if ({condition}) {{\n        own = {bit[index]}u;\n    }}\n")
+    return ("// The bit of the convex object that primitive id belongs to: its hard shadow rays\n"
+            "// leave it out, as they cannot meet it again (reference_cpu/shadows.py); 0u for a\n"
+            "// primitive of any other object.\n"
+            "uint own_object(int id)\n{\n    uint own = 0u;\n" + "".join(tests)
+            + "    return own;\n}\n\n")
 
 
 def sdf_functions(root: Node, block: ParameterBlock, distance: str = "scene_sdf",
@@ -242,13 +267,17 @@ def _unculled_march_sdf() -> str:
             "real march_sdf(vec3 p, uint objects)\n{\n    return scene_sdf(p);\n}\n")
 
 
-def _culled_march_sdf(objects, block: ParameterBlock, bounds, replay) -> tuple[str, set[str]]:
-    """``ray_objects`` (which bounded objects a ray may reach, one bit each) and ``march_sdf``
+def _culled_march_sdf(objects, block: ParameterBlock, bits, replay) -> tuple[str, set[str]]:
+    """``ray_objects`` (which of the objects with a bit a ray may reach) and ``march_sdf``
     (the union of the objects a ray keeps), as `reference_cpu.culling` and
     `reference_cpu.scene_sdf.build_scene_sdf` compute them."""
-    bit = {index: 1 << k for k, (index, _, _) in enumerate(bounds)}
+    bit = {index: 1 << k for k, (index, _, _) in enumerate(bits)}
+    # Objects with a bit but no sphere are met by every ray (a march may still leave out).
+    always = sum(bit[index] for index, centre, _ in bits if centre is None)
     tests = []
-    for index, centre, radius in bounds:
+    for index, centre, radius in bits:
+        if centre is None:
+            continue
         name = f"BOUND{index}"
         block.named({name: ("xyzw", [*centre, radius])})
         tests.append(f"    if (ray_meets_sphere(origin, direction, {name})) {{\n"
@@ -260,17 +289,19 @@ def _culled_march_sdf(objects, block: ParameterBlock, bounds, replay) -> tuple[s
         d, _ = writer.node(node, "p")
         if index not in bit:
             lines = writer.lines + [f"d = op_union(d, {d});"]
-            body.append(f"    // object {index} has no bounding sphere: always in\n"
+            body.append(f"    // object {index} has no bit: always in\n"
                         + "".join(f"    {line}\n" for line in lines))
             continue
         lines = writer.lines + [f"d = op_union(d, {d});"]
         body.append(f"    if ((objects & {bit[index]}u) != 0u) {{\n"
                     + "".join(f"        {line}\n" for line in lines) + "    }\n")
     source = (
-        "// Bit k of the result is set where the ray may reach the k-th object with a\n"
-        "// bounding sphere (BOUNDj: centre, radius widened by 2 epsilon; reference_cpu/\n"
-        "// culling.py). Objects without one (planes, endless repetition) are always in.\n"
-        "uint ray_objects(vec3 origin, vec3 direction)\n{\n    uint objects = 0u;\n"
+        "// Bit k of the result is set where the ray may reach the k-th object with a bit\n"
+        "// (reference_cpu/culling.py, object_bits): always for one without a bounding\n"
+        "// sphere, else where the ray meets its sphere (BOUNDj: centre, radius widened by 2\n"
+        "// epsilon). Objects without a bit are always in.\n"
+        "uint ray_objects(vec3 origin, vec3 direction)\n{\n"
+        f"    uint objects = {always}u;\n"
         + "".join(tests) + "    return objects;\n}\n\n"
         "// The scene's distance for one march: the union of the objects its ray may reach\n"
         "// (the others count as infinitely far), in the order of scene_sdf.\n"

@@ -10,7 +10,7 @@ parameter block. The scene becomes tables of rows (the layout is written into th
     header    (private copy P)  camera, settings, mode codes, the normal stencil
     heat      3 rows a segment  the `steps` colour ramp of scene_model/colormaps.py
     lights    5 rows a light    (position or direction, kind), radiance, attenuation, axis, cone
-    objects   16 rows an object (shape, transforms, culling bit), bounding sphere,
+    objects   16 rows an object (shape, transforms, bit, own), bounding sphere,
                                 two shape rows, then up to 4 transforms of 3 rows each
     materials 4 rows an object  as the specialised program's MATERIAL(id, row)
 
@@ -27,7 +27,7 @@ import time
 
 import numpy as np
 
-from reference_cpu.culling import MAX_CULLED, culled_bounds
+from reference_cpu.culling import MAX_CULLED, object_bits, own_objects
 from reference_cpu.normals import STENCILS
 from reference_cpu.refraction import LABEL_WEIGHT, MIN_RAY_WEIGHT
 from scene_model.camera import camera_basis
@@ -129,16 +129,18 @@ def uber_program(scene: Scene, width: int, height: int) -> Program:
     for i, light in enumerate(scene.lights):
         at = LIGHTS_START + LIGHT_STRIDE * i
         rows[at:at + LIGHT_STRIDE] = _light_rows(light)
-    bits = {}
-    if scene.render.bounding_spheres:
-        bounds = culled_bounds(scene.objects, scene.render.epsilon)
-        bits = {index: (bit, [*centre, radius])
-                for bit, (index, centre, radius) in enumerate(bounds)}
+    s = scene.render
+    skip_own = s.shadow_skip_own and s.shadows == "hard"
+    object_bit = object_bits(scene.objects, s.epsilon, s.bounding_spheres, skip_own)
+    # An object with a bit but no bounding sphere has radius -1: every ray meets it.
+    bits = {index: (bit, [0.0, 0.0, 0.0, -1.0] if centre is None else [*centre, radius])
+            for bit, (index, centre, radius) in enumerate(object_bit)}
+    own = set(own_objects(scene.objects, object_bit).tolist()) if skip_own else set()
     for i, node in enumerate(scene.objects):
         at = OBJECTS_START + OBJECT_STRIDE * i
         primitive, record = _object_rows(node)
         bit, sphere = bits.get(i, (-1, [0.0] * 4))
-        record[0][2] = bit
+        record[0][2:] = [bit, float(i in own)]
         record[BOUND_ROW] = sphere
         rows[at:at + OBJECT_STRIDE] = record
         at = MATERIALS_START + MATERIAL_STRIDE * i

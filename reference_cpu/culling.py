@@ -21,6 +21,7 @@ import numpy as np
 
 from scene_model.bounds import object_bounds
 from scene_model.geometry import dot
+from scene_model.shapes import is_convex, object_of_primitive
 
 MAX_CULLED = 32     # objects with a sphere, at most: the shader keeps one bit per object
 
@@ -66,6 +67,32 @@ def culled_bounds(objects, epsilon: float) -> list[tuple[int, np.ndarray, float]
     """The spheres every backend culls with: `scene_model.bounds.object_bounds` widened by
     2 epsilon, the first `MAX_CULLED` of them."""
     return object_bounds(objects, 2 * epsilon)[:MAX_CULLED]
+
+
+def object_bits(objects, epsilon: float, culling: bool, skip_own: bool) -> list[tuple]:
+    """The top-level objects a march may leave out, one bit each: ``(index, centre, radius)``,
+    centre and radius None for an object without a bounding sphere (always met).
+
+    With ``culling`` these are the objects of `culled_bounds`; with ``skip_own`` (hard shadow
+    rays leave out the convex object they start on, `reference_cpu.shadows`) the convex
+    objects too, after them. At most `MAX_CULLED` in all, the shader's bits: an object
+    without one is never left out, which is always safe. Every backend takes its bits from
+    here, so all leave out the same objects.
+    """
+    bits = [(i, c, r) for i, c, r in culled_bounds(objects, epsilon)] if culling else []
+    if skip_own:
+        have = {i for i, _, _ in bits}
+        bits += [(i, None, None) for i, node in enumerate(objects)
+                 if is_convex(node) and i not in have]
+    return bits[:MAX_CULLED]
+
+
+def own_objects(objects, bits) -> np.ndarray:
+    """For each primitive (by object id), the convex top-level object with a bit in ``bits``
+    (`object_bits`) that it belongs to, else -1: what its shadow rays leave out. (P,) int."""
+    convex = {i for i, _, _ in bits if is_convex(objects[i])}
+    return np.array([i if i in convex else -1 for i in object_of_primitive(objects)],
+                    dtype=np.intp)
 
 
 def ray_meets_sphere(origins, directions, centre, radius):

@@ -81,7 +81,7 @@ def textbook_march(origins, directions, sdf, max_steps, epsilon, max_distance, s
 
 
 def march(origins, directions, sdf, max_steps, epsilon, max_distance, observe=None, *,
-          relaxation="none", omega=1.2, bounds=None, start=None):
+          relaxation="none", omega=1.2, bounds=None, start=None, objects=None):
     """March every ray until it hits, escapes, or runs out of steps: `textbook_march`, fast.
 
     With ``relaxation="none"`` and no ``bounds`` the results are those of `textbook_march`,
@@ -113,6 +113,10 @@ def march(origins, directions, sdf, max_steps, epsilon, max_distance, observe=No
         Bounding-sphere culling: each ray's SDF leaves out the objects it cannot reach.
     start : (N,) ndarray, optional
         Where each ray starts, as in `textbook_march` (the cone pre-pass's distances).
+    objects : (N, K) bool ndarray, optional
+        The objects each ray's SDF may keep at most (False: left out), K the scene's
+        top-level objects; a shadow ray leaves out the convex object it starts on
+        (`reference_cpu.shadows`). With ``bounds`` too, a ray keeps what both keep.
 
     Returns
     -------
@@ -138,8 +142,12 @@ def march(origins, directions, sdf, max_steps, epsilon, max_distance, observe=No
     live = np.ones(n, dtype=bool)
     # Per-ray state of the optional features, compacted with the rest.
     extra = {}
+    kept = objects
     if bounds is not None:
-        extra["objects"] = bounds.objects_met(o, d)
+        met = bounds.objects_met(o, d)
+        kept = met if objects is None else met & objects
+    if kept is not None:
+        extra["objects"] = kept
         scene_sdf = lambda p: sdf(p, extra["objects"])
     else:
         scene_sdf = sdf

@@ -27,12 +27,12 @@ from scene_model.textures import (MAPPING_CODES, surface_mapping, texture_atlas,
 
 from . import refraction, shading, texture
 from .cone_prepass import start_distances
-from .culling import BoundingSpheres
+from .culling import BoundingSpheres, object_bits, own_objects
 from .lights import unshadowed
 from .march import march
 from .normals import estimate_normal
 from .scene_sdf import build_scene_sdf
-from .shadows import hard_shadow, soft_shadow
+from .shadows import hard_shadow, own_object_mask, soft_shadow
 
 BLOCK_RAYS = 1 << 16     # rays per block: large enough to amortise NumPy's per-call overhead
 
@@ -155,6 +155,11 @@ class Tracer:
         r = self.settings
         self.marching = {"relaxation": r.relaxation, "omega": r.omega, "bounds": (
             BoundingSpheres.of(scene.objects, r.epsilon, dtype) if r.bounding_spheres else None)}
+        # Hard shadow rays leave out the convex object they start on (reference_cpu/
+        # shadows.py): the object each primitive's rays leave out, or -1.
+        skip = r.shadow_skip_own and r.shadows == "hard"
+        self.own_object = own_objects(scene.objects, object_bits(
+            scene.objects, r.epsilon, r.bounding_spheres, skip)) if skip else None
         # Material parameters per primitive, indexed by object id (like a shader's UBO).
         prims = list(primitives(scene.objects))
         mats = [scene.materials[p.material] for p in prims]
@@ -468,8 +473,12 @@ class Tracer:
             self.dtype.type(s.surface_offset) * surface.normal[facing]
         args = (self.sdf, origins, to_light[facing], distance[facing], s.max_steps,
                 s.epsilon, s.max_distance)
-        visible[facing] = (hard_shadow(*args, **self.marching) if s.shadows == "hard"
-                           else soft_shadow(*args, self.dtype.type(s.penumbra_k)))
+        if s.shadows == "hard":
+            own = (None if self.own_object is None else own_object_mask(
+                self.own_object[surface.object_id[facing]], len(self.scene.objects)))
+            visible[facing] = hard_shadow(*args, objects=own, **self.marching)
+        else:
+            visible[facing] = soft_shadow(*args, self.dtype.type(s.penumbra_k))
         if specular is not None:
             specular = specular * visible[:, None]
         return (to_light, radiance * visible[:, None], specular, ambient,

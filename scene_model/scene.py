@@ -381,6 +381,10 @@ class RenderSettings(Record):
     normal_step: float = param(1e-3, "Finite-difference step h of the normal estimate.",
                                Range(1e-9, 1.0, positive=True))
     shadows: Literal["none", "hard", "soft"] = param("none", "Shadow rays toward each light.")
+    shadow_skip_own: bool = param(True, "Hard shadow rays leave out the convex object they "
+                                        "start on: leaving it outward, they cannot meet it "
+                                        "again (docs/sphere-tracing.md, \"Shadow rays that "
+                                        "skip their own object\").")
     penumbra_k: float = param(8.0, "Soft shadows: sharpness k of the penumbra (larger: harder).",
                               Range(0.1, 1000.0, positive=True))
     surface_offset: float = param(0.01, "Secondary rays start this far out along the normal.",

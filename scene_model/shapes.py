@@ -390,6 +390,37 @@ def primitives(nodes) -> Iterator[Primitive]:
             yield from primitives(children(node))
 
 
+# The solids that are convex for any parameters: boxes, balls, half-spaces, cylinders,
+# capsules, cones, pyramids, disks (a disc thickened by a ball) and hexagonal prisms. The
+# torus is not; nor is a union, a subtraction, a blend or a repetition of convex solids.
+CONVEX_PRIMITIVES = (Sphere, Box, RoundBox, Plane, CappedCylinder, Capsule, Cone, Pyramid, Disk,
+                     HexPrism)
+
+
+def is_convex(node: Node) -> bool:
+    """Is the solid of ``node`` convex, whatever its parameters?
+
+    A convex primitive is; moving, turning or uniformly scaling a convex solid keeps it
+    convex (an affine map takes segments to segments), and so does intersecting convex
+    solids (a segment inside each is inside all). Everything else counts as not convex,
+    even where it happens to be (a union of one child): the answer is used to skip work
+    safely, so it may say no to a convex solid but never yes to another.
+    """
+    if isinstance(node, CONVEX_PRIMITIVES):
+        return True
+    if isinstance(node, (Translate, Rotate, Scale)):
+        return is_convex(node.child)
+    if isinstance(node, Intersection):
+        return all(is_convex(child) for child in node.children)
+    return False
+
+
+def object_of_primitive(objects) -> list[int]:
+    """For each primitive of a scene (by object id, `primitives`), the index of the top-level
+    object in ``objects`` it belongs to."""
+    return [index for index, node in enumerate(objects) for _ in primitives([node])]
+
+
 def node_kinds() -> dict[str, type[Node]]:
     """Every concrete node class by its ``kind``."""
     found, stack = {}, [Node]

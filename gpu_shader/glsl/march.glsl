@@ -2,6 +2,8 @@
 // reference_cpu/shadows.py. The rules are marchlab's contract (docs/scene-format.md):
 //
 //   t starts at `start` (0, or for a camera ray its tile's cone distance: glsl/cone.glsl);
+//   the SDF leaves out the objects bounding-sphere culling drops and those whose bits are set
+//   in `leave_out` (a hard shadow ray's own convex object; 0u for every other ray);
 //   step i (1-based) evaluates d_i = |scene_sdf(o + t d)|; `steps` counts the evaluations;
 //   if d_i < EPSILON the ray hits at the current t;
 //   else t += d_i, and if t > limit the ray misses;
@@ -15,9 +17,9 @@
 // every step: this form drew the classroom scene about 8% faster than one that filled in
 // the result inside the loop (benchmarks/bench_render.py, docs/performance.md).
 
-Hit march(vec3 origin, vec3 direction, real start, real limit)
+Hit march(vec3 origin, vec3 direction, real start, real limit, uint leave_out)
 {
-    uint objects = ray_objects(origin, direction);     // bounding-sphere culling, if on
+    uint objects = ray_objects(origin, direction) & ~leave_out;    // culling, if on
     precise real t = start;
     real d = 0.0;
     int step;
@@ -40,10 +42,13 @@ Hit march(vec3 origin, vec3 direction, real start, real limit)
 }
 
 // 1 where the light is visible, 0 where the shadow ray hits something first. `origin` is
-// the surface point already pushed off the surface along its normal.
-real hard_shadow(vec3 origin, vec3 to_light, real light_distance)
+// the surface point already pushed off the surface along its normal; `own` is the bit of
+// the convex object it lies on (own_object), which the ray cannot meet again: leaving it
+// out spares the steps of creeping away from it (reference_cpu/shadows.py).
+real hard_shadow(vec3 origin, vec3 to_light, real light_distance, uint own)
 {
-    return march(origin, to_light, 0.0, min(light_distance, MAX_DISTANCE)).hit == 1 ? 0.0 : 1.0;
+    real limit = min(light_distance, MAX_DISTANCE);
+    return march(origin, to_light, 0.0, limit, own).hit == 1 ? 0.0 : 1.0;
 }
 
 // Penumbra estimate in [0, 1] (Quilez, "Soft shadows in raymarched SDFs", 2010): the same

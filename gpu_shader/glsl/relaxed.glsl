@@ -5,9 +5,9 @@
 // (glsl/march.glsl); only the length of a step changes, and a step that may have jumped
 // over a surface is taken back.
 
-Hit march(vec3 origin, vec3 direction, real start, real limit)
+Hit march(vec3 origin, vec3 direction, real start, real limit, uint leave_out)
 {
-    uint objects = ray_objects(origin, direction);
+    uint objects = ray_objects(origin, direction) & ~leave_out;
     precise real t = start;
     real t_prev = 0.0;          // the last point that was checked, and its distance
     real r_prev = 0.0;

@@ -112,15 +112,17 @@ int scene_object_id(vec3 p)
     return id;
 }
 
-// Bit b of the result is set where the ray may reach the object whose culling bit is b
-// (its bounding sphere, OBJECT(i, BOUND_ROW), widened by 2 epsilon on the CPU). Objects
-// without a bit (-1: planes, or culling off) are always in.
+// Bit b of the result is set where the ray may reach the object whose bit is b
+// (reference_cpu/culling.py, object_bits): always where it has no bounding sphere (radius
+// -1), else where the ray meets its sphere, OBJECT(i, BOUND_ROW), widened by 2 epsilon on
+// the CPU. Objects without a bit (-1) are always in.
 uint ray_objects(vec3 origin, vec3 direction)
 {
     uint objects = 0u;
     for (int i = 0; i < OBJECT_COUNT; i++) {
         int bit = int(OBJECT(i, 0).z);
-        if (bit >= 0 && ray_meets_sphere(origin, direction, OBJECT(i, BOUND_ROW))) {
+        vec4 sphere = OBJECT(i, BOUND_ROW);
+        if (bit >= 0 && (sphere.w < 0.0 || ray_meets_sphere(origin, direction, sphere))) {
             objects = objects | (1u << uint(bit));
         }
     }
@@ -128,7 +130,7 @@ uint ray_objects(vec3 origin, vec3 direction)
 }
 
 // The scene's distance for one march: the union of the objects its ray may reach. With
-// culling off every object is in and this is scene_sdf.
+// no bits (culling off, shadows that keep their own object) this is scene_sdf.
 real march_sdf(vec3 p, uint objects)
 {
     if (OBJECT_COUNT == 0) {
@@ -175,17 +177,25 @@ LightSample light_sample(int i, vec3 p)
                       LIGHT(i, 4).xy);
 }
 
-// How much of light s reaches p: shadow rays start SURFACE_OFFSET off the surface (else
-// they find the surface itself: shadow acne). Points facing away from the light, or where
-// it sends nothing, need no shadow ray: their diffuse and specular terms are zero anyway.
-real light_visible(vec3 p, vec3 n, LightSample s)
+// The bit of object id where its hard shadow rays leave it out (OBJECT(id, 0).w = 1: a
+// convex object, render.shadow_skip_own), else 0u (reference_cpu/shadows.py).
+uint own_object(int id)
+{
+    return OBJECT(id, 0).w > 0.0 ? 1u << uint(int(OBJECT(id, 0).z)) : 0u;
+}
+
+// How much of light s reaches p on object id: shadow rays start SURFACE_OFFSET off the
+// surface (else they find the surface itself: shadow acne). Points facing away from the
+// light, or where it sends nothing, need no shadow ray: their diffuse and specular terms
+// are zero anyway.
+real light_visible(vec3 p, vec3 n, LightSample s, int id)
 {
     if (!(dot(n, s.to_light) > 0.0 && max(s.radiance.x, max(s.radiance.y, s.radiance.z)) > 0.0)) {
         return 1.0;
     }
     vec3 origin = p + SURFACE_OFFSET * n;
     if (SHADOW_MODE == SHADOWS_HARD) {
-        return hard_shadow(origin, s.to_light, s.distance);
+        return hard_shadow(origin, s.to_light, s.distance, own_object(id));
     }
     return soft_shadow(origin, s.to_light, s.distance);
 }
@@ -239,7 +249,7 @@ vec4 shade_lit(vec3 p, vec3 n, vec3 v, int id)
     for (int i = 0; i < LIGHT_COUNT; i++) {
         LightSample s = light_sample(i, p);
         if (SHADOW_MODE != SHADOWS_NONE) {
-            real visible = light_visible(p, n, s);
+            real visible = light_visible(p, n, s, id);
             s.radiance = visible * s.radiance;
             features = 2.0 * features + (SHADOW_MODE == SHADOWS_HARD && visible == 0.0 ? 1.0 : 0.0);
         } else {
@@ -291,7 +301,7 @@ vec4 lit_pixel_color(vec3 origin, vec3 direction, Hit h, vec3 n, int id)
     vec3 d = direction;
     for (int bounce = 0; bounce <= REFLECTION_DEPTH; bounce++) {
         if (bounce > 0) {
-            h = march(o, d, 0.0, MAX_DISTANCE);
+            h = march(o, d, 0.0, MAX_DISTANCE, 0u);
         }
         if (h.hit == 0) {
             color = color + weight * background(d);

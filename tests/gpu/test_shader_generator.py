@@ -69,8 +69,15 @@ def test_sphere_only_program_holds_no_unused_building_block(sphere_file):
 FEATURE_SWITCHES = {
     "soft shadows": (["render.shadows=soft"], {"soft_shadow", "light_visible", "needs_shadow_ray"},
                      set(), {"shadows:soft"}, set(), None),
-    "hard shadows": (["render.shadows=hard"], {"hard_shadow", "light_visible", "needs_shadow_ray"},
-                     set(), {"shadows:hard"}, set(), None),
+    # Hard shadow rays leave out the convex object they start on: its bit (own_object) and a
+    # march_sdf that can leave an object out (op_union over the objects kept).
+    "hard shadows": (["render.shadows=hard"], {"hard_shadow", "light_visible", "needs_shadow_ray",
+                                               "own_object", "op_union"},
+                     set(), {"shadows:hard", "shadows:skip_own", "op_union"}, set(), None),
+    "hard shadows keeping their own object": (
+        ["render.shadows=hard", "render.shadow_skip_own=false"],
+        {"hard_shadow", "light_visible", "needs_shadow_ray"}, set(), {"shadows:hard"}, set(),
+        None),
     "fog": (["render.fog.density=0.1"], {"apply_fog"}, set(), {"fog"}, set(), None),
     "checker": (["materials.default.checker.scale=0.5"],
                 {"checker", "checker_parity"}, set(),

@@ -91,24 +91,30 @@ def test_reflection_ray_sees_its_own_mirror_exactly_where_its_origin_is_within_e
     assert np.all(t[hit] == 0) and np.all(steps[hit] == 1)      # the mirror itself, at once
 
 
-def mirror_floor_scene(offset):
+def mirror_floor_scene(offset, skip_own=False):
     return Scene(camera=Camera(position=(0.0, 1.5, 3.0), look_at=(0.0, 0.0, 0.0), fov=50.0),
                  render=RenderSettings(shadows="hard", reflection_depth=1,
                                        surface_offset=offset, epsilon=EPSILON,
+                                       shadow_skip_own=skip_own,
                                        background=SolidBackground(color=(0.3, 0.5, 0.9))),
                  materials={"mirror": Material(color=(0.6, 0.6, 0.6), kr=0.5)},
                  objects=(plane(material="mirror"),),
                  lights=(DirectionalLight(direction=tuple(-TO_LIGHT)),))
 
 
+@pytest.mark.parametrize("skip_own", [False, True], ids=["floor_kept", "floor_skipped"])
 @pytest.mark.parametrize("offset", [0.0, 0.5 * EPSILON, 2 * EPSILON, 0.01])
 def test_every_backend_labels_acne_and_self_reflection_exactly_where_predicted(renderer,
-                                                                              offset):
+                                                                              offset, skip_own):
     """The path label of a floor pixel records, at each bounce, the object hit and whether
     the light's shadow ray was blocked: 64 + blocked for the first bounce, then the sky
     (id -1) or the floor again with its own blocked bit, folded into the first; the pixel's
-    label is the sum of the two bounces' (reference_cpu/render.py, Tracer.lit_color)."""
-    scene = mirror_floor_scene(offset)
+    label is the sum of the two bounces' (reference_cpu/render.py, Tracer.lit_color).
+
+    With render.shadow_skip_own a shadow ray leaves the floor (convex: a half-space) out of
+    its march, so no shadow ray is blocked at any offset, 0 included: no acne. A mirror ray
+    keeps its own object, and still sees the mirror where it starts within epsilon."""
+    scene = mirror_floor_scene(offset, skip_own)
     frame = renderer.draw(scene, 48, 36)
     origin, directions = pixel_rays(scene, 48, 36)
     hit = frame.hit
@@ -117,7 +123,8 @@ def test_every_backend_labels_acne_and_self_reflection_exactly_where_predicted(r
     n_y = frame.normal[hit][:, 1].astype(np.float64)
     first = p_y + offset * n_y                   # origin height of both secondary rays
     second = p_y + 2 * offset * n_y              # shadow ray of the reflected point
-    acne, self_hit, acne_again = first < EPSILON, first < EPSILON, second < EPSILON
+    self_hit = first < EPSILON
+    acne, acne_again = (first < EPSILON) & (not skip_own), (second < EPSILON) & (not skip_own)
     first_bounce = 64 + acne.astype(np.uint32)
     second_bounce = np.where(self_hit, (first_bounce * 1009 + 1) * 64 + acne_again,
                              first_bounce * 1009 * 64) & 0xFFFFFF
@@ -125,7 +132,10 @@ def test_every_backend_labels_acne_and_self_reflection_exactly_where_predicted(r
     decided = (np.abs(first - EPSILON) > ROUNDING) & (np.abs(second - EPSILON) > ROUNDING)
     assert decided.mean() > 0.97
     np.testing.assert_array_equal(frame.path[hit][decided], label[decided])
-    if offset == 0:
+    if skip_own:
+        # The labels held no blocked bit; the mirror rays still see the floor below epsilon.
+        assert offset >= EPSILON or self_hit.mean() > 0.05
+    elif offset == 0:
         assert acne.all()
     elif offset >= EPSILON:
         assert not acne.any()

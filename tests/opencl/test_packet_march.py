@@ -89,14 +89,14 @@ __kernel void twin(__global const real* in, __global real* out)
     vec3 direction = vec3(IN(3), IN(4), IN(5));
     real limit = IN(6);
     // A start that differs from ray to ray, as the cone pre-pass's do (glsl/cone.glsl).
-    Hit hit = march(origin, direction, 0.05 * limit, limit);
+    Hit hit = march(origin, direction, 0.05 * limit, limit, 0u);
     OUT(0, hit.t);
     OUT(1, (real)(hit.steps));
     OUT(2, (real)(hit.hit));
-    OUT(3, hard_shadow(origin, direction, limit));
+    OUT(3, hard_shadow(origin, direction, limit, 0u));
     OUT(4, soft_shadow(origin, direction, limit));
     vec2 pair = hard_shadow_pair(origin, direction, limit, IN(12) != 0.0,
-                                 vec3(IN(8), IN(9), IN(10)), IN(11), IN(13) != 0.0);
+                                 vec3(IN(8), IN(9), IN(10)), IN(11), IN(13) != 0.0, 0u);
     OUT(5, pair.x);
     OUT(6, pair.y);
 }
@@ -109,14 +109,15 @@ __kernel void twin(__global const real* in, __global real* out)
     vec3p direction = pack3(IN(3), IN(4), IN(5));
     packet limit = IN(6);
     ipacket live = IN(7) != 0.0;
-    Hit hit = march(origin, direction, 0.05 * limit, limit, live);
+    Hit hit = march(origin, direction, 0.05 * limit, limit, 0u, live);
     OUT(0, hit.t);
     OUT(1, hit.steps);
     OUT(2, hit.hit);
-    OUT(3, hard_shadow(origin, direction, limit, live));
+    OUT(3, hard_shadow(origin, direction, limit, 0u, live));
     OUT(4, soft_shadow(origin, direction, limit, live));
     vec2p pair = hard_shadow_pair(origin, direction, limit, IN(12) != 0.0,
-                                  pack3(IN(8), IN(9), IN(10)), IN(11), IN(13) != 0.0, live);
+                                  pack3(IN(8), IN(9), IN(10)), IN(11), IN(13) != 0.0, 0u,
+                                  live);
     OUT(5, pair.x);
     OUT(6, pair.y);
 }
@@ -124,8 +125,9 @@ __kernel void twin(__global const real* in, __global real* out)
 OUTPUTS = 7
 # The functions the kernels call, every argument varying (one value per ray), and the mask
 # `live` that the packet forms take (they hold loops that rays leave at different times).
-ROOTS = {"march": (True,) * 4, "hard_shadow": (True,) * 3, "soft_shadow": (True,) * 3,
-         "hard_shadow_pair": (True,) * 7}
+# The objects a ray leaves out (0u here: these scenes have no object bits) are one value.
+ROOTS = {"march": (True,) * 4 + (False,), "hard_shadow": (True,) * 3 + (False,),
+         "soft_shadow": (True,) * 3, "hard_shadow_pair": (True,) * 7 + (False,)}
 
 # "plain": glsl/march.glsl; the relaxed marches replace its march and keep its shadow
 # functions, as the generator puts them together (gpu_shader/generate.py, march_parts).

@@ -13,6 +13,8 @@ light_spot(p, {{ L }}POSITION, {{ R }}, {{ L }}ATTENUATION, {{ L }}AXIS, {{ L }}
 {%- endmacro %}
 {% set specular = "specular_blinn_phong" if model == "blinn_phong" else "specular_phong" %}
 {% set band = {"toon": "toon_band", "stripes": "stripes_band"}.get(model) %}
+{# A hard shadow ray leaves out the convex object it starts on (own_object; render.shadow_skip_own). #}
+{% set own = ", own_object(id)" if skip_own | default(false) else (", 0u" if shadows == "hard" else "") %}
 {% set D = "%s(diffuse(n, s.to_light), TOON_BANDS)" % band if band else "diffuse(n, s.to_light)" %}
 {% set S = "%s(%s(n, s.to_light, v, shininess), TOON_BANDS)" % (band, specular) if band else "%s(n, s.to_light, v, shininess)" % specular %}
 {% if helpers and shadows != "none" and lights %}
@@ -25,26 +27,26 @@ bool needs_shadow_ray(vec3 n, LightSample s)
 }
 {% if paired < lights | length %}
 
-// How much of light s reaches p. Shadow rays start SURFACE_OFFSET off the surface (else they
-// find the surface itself: shadow acne).
-real light_visible(vec3 p, vec3 n, LightSample s)
+// How much of light s reaches p on object id. Shadow rays start SURFACE_OFFSET off the
+// surface (else they find the surface itself: shadow acne).
+real light_visible(vec3 p, vec3 n, LightSample s, int id)
 {
     if (!needs_shadow_ray(n, s)) {
         return 1.0;
     }
     vec3 origin = p + SURFACE_OFFSET * n;
-    return {{ shadows }}_shadow(origin, s.to_light, s.distance);
+    return {{ shadows }}_shadow(origin, s.to_light, s.distance{{ own }});
 }
 {% endif %}
 {% if paired %}
 
 // How much of lights a and b reaches p, their shadow rays marched together (from
 // SURFACE_OFFSET off the surface, as light_visible's).
-vec2 lights_visible(vec3 p, vec3 n, LightSample a, LightSample b)
+vec2 lights_visible(vec3 p, vec3 n, LightSample a, LightSample b, int id)
 {
     vec3 origin = p + SURFACE_OFFSET * n;
     return hard_shadow_pair(origin, a.to_light, a.distance, needs_shadow_ray(n, a),
-                            b.to_light, b.distance, needs_shadow_ray(n, b));
+                            b.to_light, b.distance, needs_shadow_ray(n, b){{ own }});
 }
 {% endif %}
 
@@ -77,7 +79,7 @@ vec3 shade_{{ model }}(vec3 p, vec3 n, vec3 v, int id)
     LightSample s{{ light.index }} = {{ sample(light) }};
 {% endfor %}
 {% for i in range(0, paired, 2) %}
-    vec2 visible{{ i }}{{ i + 1 }} = lights_visible(p, n, s{{ i }}, s{{ i + 1 }});
+    vec2 visible{{ i }}{{ i + 1 }} = lights_visible(p, n, s{{ i }}, s{{ i + 1 }}, id);
 {% endfor %}
 {% endif %}
 {% for light in lights %}
@@ -88,7 +90,7 @@ vec3 shade_{{ model }}(vec3 p, vec3 n, vec3 v, int id)
 {% if light.index < paired %}
     visible = visible{{ light.index - light.index % 2 }}{{ light.index - light.index % 2 + 1 }}.{{ "xy"[light.index % 2] }};
 {% else %}
-    visible = light_visible(p, n, s);
+    visible = light_visible(p, n, s, id);
 {% endif %}
 {% endif %}
 {% if light.own %}

@@ -8,7 +8,7 @@
 Pixel trace(vec3 origin, vec3 direction, real start)
 {
     Pixel px;
-    px.primary = march(origin, direction, start, MAX_DISTANCE);
+    px.primary = march(origin, direction, start, MAX_DISTANCE, 0u);
     px.normal = vec3(0.0);
     px.id = -1;
     if (px.primary.hit == 1) {
@@ -50,7 +50,7 @@ Pixel trace(vec3 origin, vec3 direction, real start)
     vec3 d = direction;
     real t0 = start;
     for (int bounce = 0; bounce <= REFLECTION_DEPTH; bounce++) {
-        Hit h = march(o, d, t0, MAX_DISTANCE);
+        Hit h = march(o, d, t0, MAX_DISTANCE, 0u);
         if (bounce == 0) {
             px.primary = h;
         }

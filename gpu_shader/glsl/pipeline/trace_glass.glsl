@@ -61,7 +61,7 @@ Pixel trace(vec3 origin, vec3 direction, real start)
     int pending = 0;
     for (int i = 0; i < TREE_RAYS; i++) {
         vec3 d = ray.direction;
-        Hit h = march(ray.origin, d, t0, MAX_DISTANCE);
+        Hit h = march(ray.origin, d, t0, MAX_DISTANCE, 0u);
         if (i == 0) {
             px.primary = h;
         }
