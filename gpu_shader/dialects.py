@@ -91,9 +91,13 @@ def _glsl_struct(name: str, fields) -> str:
     return f"struct {name}\n{{\n{body}}};\n"
 
 
-# Above this many rows a per-pixel copy would cost more than it saves (and a GPU would spill
-# the array out of its registers): large scenes read everything from the uniform buffer.
-MAX_PRIVATE_ROWS = 256
+# Above this many rows a per-pixel copy would cost more than it saves: larger scenes read
+# everything from the uniform buffer. On llvmpipe the copy is the faster draw at every size
+# measured (spheres over a floor at 320x240, 2026-11-26: 1,016 rows 552 against 1,938 ms,
+# 2,016 rows 1.3 against 6.6 s, 4,016 rows 3.3 against 27.6 s), but its compile takes longer
+# (15 against 10 s at 1,016 rows, 73 against 36 s at 2,016): 1,024 rows keeps the compile
+# within 1.5x. A GPU draws with the compute stage, where P is always U (`_glsl_compute_parameters`).
+MAX_PRIVATE_ROWS = 1024
 
 # Up to this many fixed rows reach the fragment shader as flat varyings: GL_MAX_VARYING_VECTORS
 # of llvmpipe and of NVIDIA's driver (the renderer lowers it where its context allows fewer).

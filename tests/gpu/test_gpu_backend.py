@@ -288,7 +288,8 @@ def test_first_of_two_software_devices_draws(gpu, fresh_context, monkeypatch):
 def test_scene_too_large_for_a_private_copy_reads_the_buffer_and_matches_the_reference(gpu):
     """Over MAX_PRIVATE_ROWS fixed rows, P is the uniform buffer itself; the image must not change.
 
-    200 spheres need 400 rows. Gates as in the equivalence suite (float32 reference).
+    Each sphere needs 2 rows, so MAX_PRIVATE_ROWS / 2 + 8 spheres are past it. Gates as in
+    the equivalence suite (float32 reference).
     """
     from scene_model.builder import Checker, Material, Scene, plane, sphere
     from marchlab.compare import compare_frames, failures, gates_against
@@ -296,7 +297,7 @@ def test_scene_too_large_for_a_private_copy_reads_the_buffer_and_matches_the_ref
     from gpu_shader.generate import generate
 
     objects = [plane(material="floor")] + [sphere(0.1).at(0.3 * i - 30, 0.1, -2)
-                                           for i in range(200)]
+                                           for i in range(MAX_PRIVATE_ROWS // 2 + 8)]
     scene = Scene(objects=objects, materials={"floor": Material(checker=Checker()),
                                               "default": Material()})
     source = generate(scene, 64, 48).source
