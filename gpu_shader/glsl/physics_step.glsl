@@ -596,7 +596,9 @@ void collide_count(int i) {
 // those where it is b, the order in which np.add.at adds them on the CPU.
 void collide_apply(int i) {
     vec3 v = velocity_of(i), w = spin_of(i);
-    if (counters[COUNT_COLLIDING + u_pass] != 0u) {
+    // collide_count classified this body's contacts from these very velocities: one with
+    // none colliding gets no impulse, and skips the loop that would find none again.
+    if (counters[COUNT_COLLIDING + u_pass] != 0u && bodies[i].colliding > 0) {
         int start = list_start(i, u_list), count = bodies[i].contact_count[u_list];
         for (int c = 0; c < count; c++) {
             Contact k = contacts[start + c];
