@@ -21,14 +21,12 @@ Two Markdown tables, for docs/performance.md:
 from __future__ import annotations
 
 import argparse
-import dataclasses
-import statistics
-import time
 
 import numpy as np
 
 import marchlab
 import reference_cpu.shadows
+from bench_prepass import alternating_times, with_settings
 from marchlab.cli import parse_size
 from marchlab.render import backend_problem
 from scene_model.scene import rendered_scene
@@ -36,10 +34,6 @@ from scene_model.scenefile import bundled_scene_names, load_scene
 
 TIMED = {"gpu": "float32", "opencl float32": "float32", "opencl float64": "float64"}
 COUNT_SIZE = (320, 240)
-
-
-def with_settings(scene, **changes):
-    return dataclasses.replace(scene, render=dataclasses.replace(scene.render, **changes))
 
 
 class StepCounter:
@@ -82,15 +76,7 @@ def steps_row(name, scene) -> str:
 def times(scene, width, height, backend, precision, repeat):
     """Median seconds per frame without and with the setting, alternating."""
     variants = [with_settings(scene, shadow_skip_own=skip) for skip in (False, True)]
-    for variant in variants:                           # compile both programs first
-        marchlab.render(variant, width, height, backend=backend, precision=precision)
-    seconds = [[], []]
-    for _ in range(repeat):
-        for i, variant in enumerate(variants):
-            start = time.perf_counter()
-            marchlab.render(variant, width, height, backend=backend, precision=precision)
-            seconds[i].append(time.perf_counter() - start)
-    return [statistics.median(s) for s in seconds]
+    return alternating_times(variants, width, height, backend, precision, repeat)
 
 
 def main() -> None:
