@@ -272,7 +272,8 @@ def _culled_march_sdf(objects, block: ParameterBlock, bits, replay) -> tuple[str
     (the union of the objects a ray keeps), as `reference_cpu.culling` and
     `reference_cpu.scene_sdf.build_scene_sdf` compute them."""
     bit = {index: 1 << k for k, (index, _, _) in enumerate(bits)}
-    # Objects with a bit but no sphere are met by every ray (a march may still leave out).
+    # Objects with a bit but no sphere are met by every ray; a shadow march may still leave
+    # its own object out (own_object).
     always = sum(bit[index] for index, centre, _ in bits if centre is None)
     tests = []
     for index, centre, radius in bits:
