@@ -79,7 +79,7 @@ def object_bits(objects, epsilon: float, culling: bool, skip_own: bool) -> list[
     without one is never left out, which is always safe. Every backend takes its bits from
     here, so all leave out the same objects.
     """
-    bits = [(i, c, r) for i, c, r in culled_bounds(objects, epsilon)] if culling else []
+    bits = list(culled_bounds(objects, epsilon)) if culling else []
     if skip_own:
         have = {i for i, _, _ in bits}
         bits += [(i, None, None) for i, node in enumerate(objects)

@@ -21,6 +21,7 @@ import marchlab
 import reference_cpu.shadows
 from reference_cpu.culling import MAX_CULLED, object_bits, own_objects
 from reference_cpu.scene_sdf import build_scene_sdf
+from reference_cpu.shadows import own_object_mask
 from scene_model.builder import (Camera, Material, PointLight, RenderSettings, Scene,
                                  SolidBackground, box, capsule, cone, disk, hex_prism,
                                  intersection, plane, pyramid, round_box, sphere, torus,
@@ -151,8 +152,7 @@ def test_a_floor_point_is_shadowed_exactly_where_the_segment_to_the_light_meets_
     to_light = offset / distance[:, None]
     along = np.clip(np.einsum("ij,ij->i", BALL - origins, to_light), 0, distance)
     clearance = np.linalg.norm(origins + along[:, None] * to_light - BALL, axis=1) - 1.0
-    own = np.ones((len(p), 2), dtype=bool)
-    own[:, 0] = False                                   # every ray starts on the floor
+    own = own_object_mask(np.zeros(len(p), dtype=np.intp), 2)   # every ray leaves the floor
     sdf = build_scene_sdf(OVER_THE_FLOOR.objects)
     visible = reference_cpu.shadows.hard_shadow(sdf, origins, to_light, distance, 512, 1e-6,
                                                 100.0, objects=own)

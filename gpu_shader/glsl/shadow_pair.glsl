@@ -5,9 +5,9 @@
 // hard_shadow for two lights at once (a point lit by two lights): rays a and b leave the
 // same origin and are marched in one loop, a step of each per iteration, by march's rules;
 // a ray whose `need` is false is not marched and counts as visible. The answers are those of
-// two hard_shadow calls (`own` as theirs), but the two chains of dependent arithmetic overlap, and a block of
-// pixels waits once for its slowest pair instead of once per light: 8% of the classroom
-// scene's draw on llvmpipe (docs/performance.md).
+// two hard_shadow calls (`own` as theirs), but the two chains of dependent arithmetic
+// overlap, and a block of pixels waits once for its slowest pair instead of once per light:
+// 8% of the classroom scene's draw on llvmpipe (docs/performance.md).
 vec2 hard_shadow_pair(vec3 origin, vec3 to_light_a, real distance_a, bool need_a,
                       vec3 to_light_b, real distance_b, bool need_b, uint own)
 {
