@@ -99,15 +99,16 @@ struct Body {
 };
 
 struct Motion {             // SolverBodies row: velocity and spin during the solver
-    vec4 velocity;
-    vec4 spin;
+    vec4 velocity;          // w: the body's inverse mass times its share (mass splitting)
+    vec4 spin;              // w: r^2 times its inverse inertia times its share
 };
 
 struct Contact {            // one entry of a body's contact list (physics.contacts.Contacts)
     vec4 normal_gap;        // xyz: unit normal from b to a; w: gap (m)
     vec4 tangent_total;     // xyz: accumulated friction impulse on a (N s); w: unused
     vec4 surface_velocity;  // xyz: velocity of b's surface at the contact (m/s): a moving
-                            // shape's (a kinematic object), 0 for the others; w: unused
+                            // shape's (a kinematic object), 0 for the others; w: the other
+                            // sphere's radius, 0 for the static world
     int other;              // the other sphere's index, plane_code(p) or shape_code(q)
     int slot;               // which of the ball's contacts with that shape (0 for the others)
     float normal_total;     // accumulated normal impulse (N s)
@@ -244,32 +245,51 @@ float inverse_inertia_of(int body) { return body < 0 ? 0.0 : bodies[body].invers
 
 // --- the formulas of physics/impulses.py ---------------------------------------------------
 
+// The other body of a contact, as a sweep or pass reads it: one row of the Motion buffer,
+// velocity and spin, with its mass terms in their w components, and its radius from the
+// contact (surface_velocity.w). llvmpipe gathers a storage buffer lane by lane, one load of
+// each vector or scalar at a time: two vec4 loads per contact instead of a dozen scattered
+// reads of the other body's 172-byte Body made the solver's dispatches about a third faster
+// (docs/performance.md, "Stage by stage").
+struct Other {
+    vec3 velocity, spin;
+    float radius;
+    vec2 masses;            // inverse mass and r^2 times inverse inertia, times the share
+};
+
+// The other body of body i's contact with `other` (a sphere's index, or < 0: the static world,
+// which has no velocity, spin or mass). `contact` is the contact's surface_velocity.
+Other other_body(int other, vec4 contact) {
+    if (other < 0) return Other(vec3(0.0), vec3(0.0), 0.0, vec2(0.0));
+    Motion row = motion[u_read * u_count + other];
+    return Other(row.velocity.xyz, row.spin.xyz, contact.w, vec2(row.velocity.w, row.spin.w));
+}
+
+// A body's mass terms under mass splitting (solvers._masses): its inverse mass times `share`,
+// and r^2 times its inverse inertia times `share`, in the order the CPU multiplies them.
+vec2 shared_masses(int body, float share) {
+    float ii = bodies[body].inverse_inertia * share, r = bodies[body].radius;
+    return vec2(bodies[body].inverse_mass * share, r * r * ii);
+}
+
 // v_rel of a's contact point relative to b's: v_a - v_b - (r_a w_a + r_b w_b) x n, less the
 // velocity `surface` of a moving static surface b (a kinematic object; 0 for the others).
 // Body i is a or b; its velocity, spin and radius (v_i, w_i, r_i, this sweep's) were read
-// once for all its contacts, and only the other body's are read here. llvmpipe gathers a
-// storage buffer lane by lane: reading one body instead of two per contact made the step
-// about 10% faster at 10,000 spheres (docs/performance.md). The arithmetic is that of
-// impulses.relative_velocity, in the same order.
-vec3 relative_velocity(int i, vec3 v_i, vec3 w_i, float r_i, int a, int b, vec3 n,
+// once for all its contacts. The arithmetic is that of impulses.relative_velocity, in the
+// same order.
+vec3 relative_velocity(bool first, vec3 v_i, vec3 w_i, float r_i, Other o, vec3 n,
                        vec3 surface) {
-    bool first = i == a;
-    int other = first ? b : a;
-    vec3 v_o = velocity_of(other), w_o = spin_of(other);
-    float r_o = radius_of(other);
-    vec3 lever = first ? r_i * w_i + r_o * w_o : r_o * w_o + r_i * w_i;
-    vec3 v_ab = first ? v_i - v_o : v_o - v_i;
+    vec3 lever = first ? r_i * w_i + o.radius * o.spin : o.radius * o.spin + r_i * w_i;
+    vec3 v_ab = first ? v_i - o.velocity : o.velocity - v_i;
     return v_ab - cross3(lever, n) - surface;
 }
 
-// k_n = 1/m_a + 1/m_b and k_t = k_n + r_a^2/I_a + r_b^2/I_b, each inverse mass and inertia
-// multiplied by its body's share (mass splitting; solvers._masses).
-vec2 effective_masses(int a, int b, float share_a, float share_b) {
-    float ima = inverse_mass_of(a) * share_a, imb = inverse_mass_of(b) * share_b;
-    float iia = inverse_inertia_of(a) * share_a, iib = inverse_inertia_of(b) * share_b;
-    float ra = radius_of(a), rb = radius_of(b);
-    float k_normal = ima + imb;
-    float k_tangent = k_normal + ra * ra * iia + rb * rb * iib;
+// k_n = 1/m_a + 1/m_b and k_t = k_n + r_a^2/I_a + r_b^2/I_b (impulses.effective_masses), from
+// each body's shared_masses: body i's (`own`) and the other's, a's terms added first.
+vec2 effective_masses(bool first, vec2 own, Other o) {
+    vec2 a = first ? own : o.masses, b = first ? o.masses : own;
+    float k_normal = a.x + b.x;
+    float k_tangent = k_normal + a.y + b.y;
     return vec2(k_normal, k_tangent);
 }
 
@@ -311,13 +331,19 @@ vec3 contact_impulse(vec3 v_rel, vec3 n, float target, float friction, vec2 k,
     return impulse;
 }
 
-// apply_impulse, for one of the two bodies: P to a, -P to b; both spins turn the same way.
-void apply_impulse(int i, int a, vec3 n, vec3 impulse, inout vec3 velocity, inout vec3 spin) {
+// apply_impulse, for one of the two bodies: P to a (`first`), -P to b; both spins turn the
+// same way. `own` is the body's inverse mass and its radius times its inverse inertia.
+void apply_impulse(bool first, vec3 n, vec3 impulse, vec2 own, inout vec3 velocity,
+                   inout vec3 spin) {
     vec3 turn = cross3(n, impulse);
-    Body self = bodies[i];
-    if (i == a) velocity += impulse * self.inverse_mass;
-    else velocity += -impulse * self.inverse_mass;
-    spin += -(self.radius * self.inverse_inertia) * turn;
+    if (first) velocity += impulse * own.x;
+    else velocity += -impulse * own.x;
+    spin += -own.y * turn;
+}
+
+// Body i's inverse mass and radius times inverse inertia, as apply_impulse takes them.
+vec2 impulse_masses(int i) {
+    return vec2(bodies[i].inverse_mass, bodies[i].radius * bodies[i].inverse_inertia);
 }
 
 // Pair coefficients, mixed as Box2D does: max of restitutions, sqrt of the frictions' product
@@ -478,7 +504,7 @@ Contact sphere_contact(int i, int j) {
     // coincident centres: the fixed fallback normal +y (contacts.FALLBACK_NORMAL)
     vec3 n = distance == 0.0 ? FALLBACK_NORMAL : d / distance;
     float gap = distance - (bodies[a].radius + bodies[b].radius);
-    return Contact(vec4(n, gap), vec4(0.0), vec4(0.0), j, 0, 0.0, 0.0,
+    return Contact(vec4(n, gap), vec4(0.0), vec4(vec3(0.0), bodies[j].radius), j, 0, 0.0, 0.0,
                    sphere_coefficients(i, j), vec2(0.0));
 }
 
@@ -586,7 +612,9 @@ void begin_step(int i) {
 }
 
 // The first half of solvers._collide_together: how many of this body's contacts collide in
-// sweep u_pass (its mass is split among them), and whether anything collides at all.
+// sweep u_pass (its mass is split among them), and whether anything collides at all. The
+// body's mass terms under that split go into the w components of its Motion row, where
+// collide_apply reads them as the other body's (other_body).
 void collide_count(int i) {
     if (u_pass > 0 && counters[COUNT_COLLIDING + u_pass - 1] == 0u) return;   // loop ended
     int start = list_start(i, u_list), count = bodies[i].contact_count[u_list];
@@ -595,13 +623,15 @@ void collide_count(int i) {
     int colliding = 0;
     for (int c = 0; c < count; c++) {
         Contact k = contacts[start + c];
-        int a, b;
-        contact_bodies(i, k.other, a, b);
-        vec3 v_rel = relative_velocity(i, v_i, w_i, r_i, a, b, k.normal_gap.xyz,
-                                       k.surface_velocity.xyz);
+        Other o = other_body(k.other, k.surface_velocity);
+        vec3 v_rel = relative_velocity(k.other < 0 || i < k.other, v_i, w_i, r_i, o,
+                                       k.normal_gap.xyz, k.surface_velocity.xyz);
         if (k.gravity_part - dot3(v_rel, k.normal_gap.xyz) > u_threshold) colliding++;
     }
     bodies[i].colliding = colliding;
+    vec2 masses = shared_masses(i, float(colliding));
+    motion[u_read * u_count + i].velocity.w = masses.x;
+    motion[u_read * u_count + i].spin.w = masses.y;
     if (colliding > 0) atomicAdd(counters[COUNT_COLLIDING + u_pass], uint(colliding));
 }
 
@@ -611,28 +641,28 @@ void collide_count(int i) {
 void collide_apply(int i) {
     vec3 v = velocity_of(i), w = spin_of(i);
     vec3 v_i = v, w_i = w;                        // read once for every contact
-    float r_i = radius_of(i);
     // collide_count classified this body's contacts from these very velocities: one with
     // none colliding gets no impulse, and skips the loop that would find none again.
     if (counters[COUNT_COLLIDING + u_pass] != 0u && bodies[i].colliding > 0) {
+        float r_i = radius_of(i);
+        vec2 own = shared_masses(i, float(bodies[i].colliding)), applied = impulse_masses(i);
         int start = list_start(i, u_list), count = bodies[i].contact_count[u_list];
         for (int c = 0; c < count; c++) {
             Contact k = contacts[start + c];
-            int a, b;
-            contact_bodies(i, k.other, a, b);
+            bool first = k.other < 0 || i < k.other;
+            Other o = other_body(k.other, k.surface_velocity);
             vec3 n = k.normal_gap.xyz;
-            vec3 v_rel = relative_velocity(i, v_i, w_i, r_i, a, b, n, k.surface_velocity.xyz);
+            vec3 v_rel = relative_velocity(first, v_i, w_i, r_i, o, n, k.surface_velocity.xyz);
             if (k.gravity_part - dot3(v_rel, n) <= u_threshold) continue;
-            float share_b = b < 0 ? 1.0 : float(bodies[b].colliding);
-            vec2 mass = effective_masses(a, b, float(bodies[a].colliding), share_b);
+            vec2 mass = effective_masses(first, own, o);
             float j, approach;
             vec3 impulse = collision_impulse(v_rel, n, k.gravity_part, k.coefficients.x,
                                              k.coefficients.y, mass, u_threshold, j,
                                              approach);
             if (!(j > 0.0)) continue;
-            apply_impulse(i, a, n, impulse, v, w);
-            if (i == a) {
-                record_event(u_pass, event_kind(k.other), a, event_other(k.other), k.slot,
+            apply_impulse(first, n, impulse, applied, v, w);
+            if (first) {
+                record_event(u_pass, event_kind(k.other), i, event_other(k.other), k.slot,
                              approach, j);
             }
         }
@@ -641,42 +671,45 @@ void collide_apply(int i) {
 }
 
 // solvers._apply_warm_start: last step's resting impulses, friction turned into the current
-// tangent plane.
+// tangent plane. The body's mass terms for the resting passes (its mass split among all its
+// contacts) go into the w components of its Motion row, and each pass carries them on.
 void warm_start_apply(int i) {
     vec3 v = velocity_of(i), w = spin_of(i);
+    vec2 applied = impulse_masses(i);
     int start = list_start(i, u_list), count = bodies[i].contact_count[u_list];
     for (int c = 0; c < count; c++) {
         Contact k = contacts[start + c];
-        int a, b;
-        contact_bodies(i, k.other, a, b);
         vec3 n = k.normal_gap.xyz;
         vec3 tangent = k.tangent_total.xyz - dot3(k.tangent_total.xyz, n) * n;
         contacts[start + c].tangent_total.xyz = tangent;
-        apply_impulse(i, a, n, k.normal_total * n + tangent, v, w);
+        apply_impulse(k.other < 0 || i < k.other, n, k.normal_total * n + tangent, applied,
+                      v, w);
     }
-    motion[(1 - u_read) * u_count + i] = Motion(vec4(v, 0.0), vec4(w, 0.0));
+    vec2 masses = shared_masses(i, float(count));
+    motion[(1 - u_read) * u_count + i] = Motion(vec4(v, masses.x), vec4(w, masses.y));
 }
 
 // solvers._rest over every contact, mass split among all of a body's contacts; stops (copies
 // through) once the previous pass changed no velocity by more than SETTLED.
 void rest_pass(int i) {
-    vec3 v = velocity_of(i), w = spin_of(i);
+    Motion row = motion[u_read * u_count + i];
+    vec3 v = row.velocity.xyz, w = row.spin.xyz;
     vec3 v_i = v, w_i = w;                        // read once for every contact
-    float r_i = radius_of(i);
+    vec2 own = vec2(row.velocity.w, row.spin.w);  // warm_start_apply's shared_masses
     bool running = u_pass == 0
         || uintBitsToFloat(counters[COUNT_CHANGE + u_pass - 1]) >= SETTLED;
     if (running) {
+        float r_i = radius_of(i);
+        vec2 applied = impulse_masses(i);
         int start = list_start(i, u_list), count = bodies[i].contact_count[u_list];
         float change = 0.0;
         for (int c = 0; c < count; c++) {                 // a's contacts first, then b's
             Contact k = contacts[start + c];
-            int a, b;
-            contact_bodies(i, k.other, a, b);
+            bool first = k.other < 0 || i < k.other;
+            Other o = other_body(k.other, k.surface_velocity);
             vec3 n = k.normal_gap.xyz;
-            vec3 v_rel = relative_velocity(i, v_i, w_i, r_i, a, b, n, k.surface_velocity.xyz);
-            float share_b = b < 0 ? 1.0 : float(bodies[b].contact_count[u_list]);
-            vec2 mass = effective_masses(a, b, float(bodies[a].contact_count[u_list]),
-                                         share_b);
+            vec3 v_rel = relative_velocity(first, v_i, w_i, r_i, o, n, k.surface_velocity.xyz);
+            vec2 mass = effective_masses(first, own, o);
             float target = -max(k.normal_gap.w, 0.0) / u_h;     // solvers._resting_target
             float normal_total = k.normal_total;
             vec3 tangent_total = k.tangent_total.xyz;
@@ -684,12 +717,12 @@ void rest_pass(int i) {
                                            normal_total, tangent_total);
             contacts[start + c].normal_total = normal_total;
             contacts[start + c].tangent_total.xyz = tangent_total;
-            apply_impulse(i, a, n, impulse, v, w);
+            apply_impulse(first, n, impulse, applied, v, w);
             change = max(change, sqrt(dot3(impulse, impulse)) * mass.y);
         }
         atomicMax(counters[COUNT_CHANGE + u_pass], floatBitsToUint(change));
     }
-    motion[(1 - u_read) * u_count + i] = Motion(vec4(v, 0.0), vec4(w, 0.0));
+    motion[(1 - u_read) * u_count + i] = Motion(vec4(v, own.x), vec4(w, own.y));
 }
 
 // integrators.py: x_{n+1} from x_n, v_n and v_{n+1}, each scheme written as on the CPU.
