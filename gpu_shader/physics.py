@@ -93,7 +93,8 @@ DRAIN_EVERY = 4          # steps between read-backs of the event buffer (not of 
 GROUP = 64               # local_size_x of the shader
 
 STAGES = dict(begin=0, collide_count=1, collide_apply=2, warm_start=3, rest=4, positions=5,
-              finish=6, grid_count=7, grid_scan=8, grid_scan_blocks=9, grid_scatter=10)
+              finish=6, grid_count=7, grid_scan=8, grid_scan_blocks=9, grid_scatter=10,
+              grid_scan_add=11)
 INTEGRATOR_CODES = {"explicit": 0, "semi_implicit": 1, "verlet": 2}
 # The shader's event kinds, in the order the CPU records the events of one collision sweep.
 EVENT_KINDS = np.array(["sphere-plane", "sphere-shape", "sphere-sphere", "left-bounds"])
@@ -289,6 +290,7 @@ class GpuStepper:
         self._dispatch("grid_count")              # the broad phase: sort the bodies by cell
         self._dispatch("grid_scan", invocations=self.table_size // self.scan_block)
         self._dispatch("grid_scan_blocks", invocations=1)
+        self._dispatch("grid_scan_add", invocations=self.table_size + 1)
         self._dispatch("grid_scatter")
         self._dispatch("begin")
         read = 0                                  # velocity slot holding v*

@@ -9,6 +9,8 @@
 //                            rank among the bodies of that slot (an atomic counter per slot)
 //   STAGE_GRID_SCAN          each block of u_scan_block slots: running totals of the counts
 //   STAGE_GRID_SCAN_BLOCKS   one invocation: running totals of the blocks' totals
+//   STAGE_GRID_SCAN_ADD      each slot: its block's start added to its own (slot_start: one
+//                            read per slot where a walk looks, not two)
 //   STAGE_GRID_SCATTER       each body: (cell, index) written at its slot's start + its rank
 //
 // after which the bodies of slot s are grid_entries[slot_start(s) .. slot_start(s + 1) - 1],
@@ -50,10 +52,9 @@ uint grid_slot(ivec3 cell) {
 
 bool finite3(vec3 x) { return !any(isinf(x)) && !any(isnan(x)); }
 
-// Where the bodies of slot s start in grid_entries (s = u_table_size: the end of the last).
-int slot_start(uint slot) {
-    return int(block_start[slot / uint(u_scan_block)] + cell_start[slot]);
-}
+// Where the bodies of slot s start in grid_entries (s = u_table_size: the end of the last),
+// once STAGE_GRID_SCAN_ADD has run.
+int slot_start(uint slot) { return int(cell_start[slot]); }
 
 // STAGE_GRID_COUNT: body i's place in its cell's slot, kept in grid_rank; -1 (not in the
 // grid) for a body out of the world or at a position that is not finite, which no exact test
@@ -92,6 +93,14 @@ void scan_block_totals() {
         running += total;
     }
     block_start[u_table_size / u_scan_block] = running;
+}
+
+// STAGE_GRID_SCAN_ADD, for slot s: where its block starts added to where the slot starts
+// within its block; for s = u_table_size (no block's), the number in the grid.
+void scan_add(uint slot) {
+    uint block_of = slot / uint(u_scan_block);
+    if (slot == uint(u_table_size)) cell_start[slot] = block_start[block_of];
+    else cell_start[slot] += block_start[block_of];
 }
 
 // STAGE_GRID_SCATTER: body i and its cell, at its place among the bodies sorted by slot.

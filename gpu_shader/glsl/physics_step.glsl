@@ -54,6 +54,7 @@ layout(local_size_x = 64) in;
 #define STAGE_GRID_SCAN 8
 #define STAGE_GRID_SCAN_BLOCKS 9
 #define STAGE_GRID_SCATTER 10
+#define STAGE_GRID_SCAN_ADD 11
 
 // Event kinds, numbered in the order the CPU records the events of one collision sweep
 // (gpu_shader.physics.EVENT_KINDS).
@@ -1017,6 +1018,10 @@ void main() {
     int i = int(gl_GlobalInvocationID.x);
     if (STAGE == STAGE_GRID_SCAN) {                      // one invocation per block of slots
         if (i < u_table_size / u_scan_block) scan_block(i);
+        return;
+    }
+    if (STAGE == STAGE_GRID_SCAN_ADD) {                  // one invocation per slot, and the end
+        if (i <= u_table_size) scan_add(uint(i));
         return;
     }
     if (STAGE == STAGE_GRID_SCAN_BLOCKS) {               // one invocation
