@@ -301,6 +301,7 @@ def _opencl_packet_prelude(real: str) -> str:
     types = f"""\
 // Packets: {n} rays per work-item, one vector lane each (glsl/packet.cl says how).
 #define LANES {n}
+#define PACKET_DOUBLE {int(real == "double")}
 typedef {real}{n} packet;
 typedef {integer}{n} ipacket;
 typedef {unsigned}{n} upacket;

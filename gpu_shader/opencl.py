@@ -190,8 +190,10 @@ def render(scene: Scene, width: int, height: int, precision: str = "float32",
     flags = cl.mem_flags
     parameters = cl.Buffer(dev.context, flags.READ_ONLY | flags.COPY_HOST_PTR,
                            hostbuf=parameter_buffer(program, dtype))
-    planes = np.empty((3, height, width, 4), dtype)
-    outputs = [cl.Buffer(dev.context, flags.WRITE_ONLY, planes[i].nbytes) for i in range(3)]
+    # colour and hit in float32 (the Frame's), normal and depth in the precision, counts in
+    # int32 (glsl/main.cl)
+    planes = [np.empty((height, width, 4), t) for t in (np.float32, dtype, np.int32)]
+    outputs = [cl.Buffer(dev.context, flags.WRITE_ONLY, plane.nbytes) for plane in planes]
     local = PACKET_WORK_GROUP if packets else WORK_GROUP
     if program.prepass_tile:
         # The cone pre-pass first: one work-item per tile (per LANES tiles of a row in the

@@ -3,9 +3,12 @@
 // the same three planes of 4 values per pixel that the GLSL shader writes into its render
 // targets, so both backends build their Frame the same way (gpu_shader/planes.py).
 //
-//   color_hit:    rgb colour in [0, 1], 1 on a hit
-//   normal_depth: unit normal, depth t (inf on a miss)
+//   color_hit:    rgb colour in [0, 1], 1 on a hit                  (float32: Frame.color's)
+//   normal_depth: unit normal, depth t (inf on a miss)               (in the precision)
 //   steps_id:     SDF evaluations, object id (-1 on a miss), path label (24 bits; 0 without)
+//                                                                    (int32)
+// Only the middle plane needs float64 in a float64 program: the colour is kept as float32 and
+// the counts are integers, so the other two are written as such, a third less to copy back.
 //
 // The calls below are written as in GLSL; generating the program passes the parameter buffer
 // P on as their first argument (thread_parameters in gpu_shader/dialects.py).
@@ -27,9 +30,9 @@ __kernel void cone_prepass(PARAMETERS, __global real* restrict cone_starts)
 
 {% endif %}
 __kernel void render(PARAMETERS,
-                     __global vec4* restrict color_hit,
+                     __global float4* restrict color_hit,
                      __global vec4* restrict normal_depth,
-                     __global vec4* restrict steps_id{{ ",\n                     __global const real* restrict cone_starts" if prepass }})
+                     __global int4* restrict steps_id{{ ",\n                     __global const real* restrict cone_starts" if prepass }})
 {
     // Work-item (column, row) is the pixel whose centre is (column + 0.5, row + 0.5), row 0
     // at the top, as in the reference. The launch may be padded to whole work-groups.
@@ -58,7 +61,7 @@ __kernel void render(PARAMETERS,
 
     Hit h = px.primary;
     int pixel = row * (int)(IMAGE_WIDTH) + column;
-    color_hit[pixel] = vec4(clamp(px.color, 0.0, 1.0), (real)(h.hit));
+    color_hit[pixel] = (float4)(convert_float3(clamp(px.color, 0.0, 1.0)), (float)(h.hit));
     normal_depth[pixel] = vec4(px.normal, h.hit == 1 ? h.t : INFINITY);
-    steps_id[pixel] = vec4((real)(h.steps), (real)(px.id), {{ "px.path" if path_labels else "0.0" }}, 0.0);
+    steps_id[pixel] = (int4)(h.steps, px.id, {{ "(int)(px.path)" if path_labels else "0" }}, 0);
 }

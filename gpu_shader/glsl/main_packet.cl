@@ -30,9 +30,9 @@ __kernel void cone_prepass(PARAMETERS, __global real* restrict cone_starts)
 
 {% endif %}
 __kernel void render(PARAMETERS,
-                     __global vec4* restrict color_hit,
+                     __global float4* restrict color_hit,
                      __global vec4* restrict normal_depth,
-                     __global vec4* restrict steps_id{{ ",\n                     __global const real* restrict cone_starts" if prepass }})
+                     __global int4* restrict steps_id{{ ",\n                     __global const real* restrict cone_starts" if prepass }})
 {
     // Work-item (i, row) holds the pixels first .. first + LANES - 1 of its row, lane k the
     // pixel whose centre is (first + k + 0.5, row + 0.5). Lanes past the image's right edge
@@ -68,16 +68,14 @@ __kernel void render(PARAMETERS,
 
     Hit h = px.primary;
     vec3p color = clamp(px.color, 0.0, 1.0);
-    packet hit = convert_packet(h.hit);
     packet depth = h.hit == 1 ? h.t : (packet)(INFINITY);
-    packet steps = convert_packet(h.steps);
-    packet object = convert_packet(px.id);
-    packet path = {{ "px.path" if path_labels else "0.0" }};
+    ipacket path = {{ "convert_ipacket(px.path)" if path_labels else "0" }};
     int lanes = min(LANES, (int)(IMAGE_WIDTH) - first);
-    for (int k = 0; k < lanes; k++) {
+    for (int k = 0; k < lanes; k++) {       // the planes' types: main.cl
         int pixel = row * (int)(IMAGE_WIDTH) + first + k;
-        color_hit[pixel] = vec4(color.x[k], color.y[k], color.z[k], hit[k]);
+        color_hit[pixel] = (float4)((float)(color.x[k]), (float)(color.y[k]), (float)(color.z[k]),
+                                    (float)(h.hit[k]));
         normal_depth[pixel] = vec4(px.normal.x[k], px.normal.y[k], px.normal.z[k], depth[k]);
-        steps_id[pixel] = vec4(steps[k], object[k], path[k], 0.0);
+        steps_id[pixel] = (int4)((int)(h.steps[k]), (int)(px.id[k]), (int)(path[k]), 0);
     }
 }
