@@ -21,6 +21,8 @@ grid helps; with ``crowd_window`` the work stays bounded there instead (crowds.p
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from physics.crowds import cell_capacity, crowd_pairs
@@ -70,12 +72,24 @@ def brute_force_pairs(centre: np.ndarray, reach: np.ndarray):
     i, j : (M,) int64 ndarrays
         The pairs, sorted by i then j. O(N^2): the reference the grid is tested against.
     """
-    # Every pair at once, as an (N, N) table: the same arithmetic as `_close`, term by term.
-    d = centre[:, None, :] - centre[None, :, :]
-    distance_squared = d[..., 0] * d[..., 0] + d[..., 1] * d[..., 1] + d[..., 2] * d[..., 2]
-    limit = reach[:, None] + reach[None, :]
-    i, j = np.nonzero(np.triu(distance_squared <= limit * limit, k=1))    # row by row: sorted
-    return i.astype(np.int64), j.astype(np.int64)
+    # Every pair i < j at once, row by row (so sorted): the same arithmetic as `_close`, term
+    # by term.
+    i, j = _upper_pairs(len(centre))
+    d = centre[i] - centre[j]
+    distance_squared = d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1] + d[:, 2] * d[:, 2]
+    limit = reach[i] + reach[j]
+    close = distance_squared <= limit * limit
+    return i[close], j[close]
+
+
+@functools.lru_cache(maxsize=8)
+def _upper_pairs(n: int):
+    """Every pair i < j of n bodies, sorted by i then j: (n (n - 1) / 2,) int64 each, kept
+    for the next step (a world's count seldom changes)."""
+    i, j = np.triu_indices(n, k=1)
+    i, j = i.astype(np.int64), j.astype(np.int64)
+    i.flags.writeable = j.flags.writeable = False
+    return i, j
 
 
 def grid_pairs(centre: np.ndarray, reach: np.ndarray, crowd_window=None, counter=None):

@@ -53,7 +53,7 @@ import numpy as np
 
 from physics.colliders import MAX_SHAPE_CONTACTS
 from physics.impulses import (SolverBodies, apply_impulse, collision_impulse, contact_impulse,
-                              effective_masses, relative_velocity)
+                              effective_masses, relative_velocity, scatter_add)
 from scene_model.geometry import dot
 
 SETTLED = 1e-9   # m/s: resting passes stop once none changes a velocity by more than this
@@ -231,8 +231,8 @@ def separate_overlaps(position, contacts, inverse_mass, slop, fraction):
     n = len(position)
     total = np.zeros((n + 1, 3), position.dtype)
     count = np.bincount(np.concatenate([a, b]), minlength=n + 1).astype(position.dtype)
-    np.add.at(total, a, push * im_a[:, None])
-    np.add.at(total, b, -push * im_b[:, None])
+    scatter_add(total, a, push * im_a[:, None])
+    scatter_add(total, b, -push * im_b[:, None])
     position += total[:n] / np.maximum(count[:n], 1)[:, None]
 
 
@@ -263,7 +263,8 @@ def _collide_together(bodies, contacts, gravity_part, threshold):
         return None
     share = _count(bodies, a[colliding], b[colliding])
     k_normal, k_tangent = _masses(bodies, contacts, share)
-    return _collide(bodies, contacts, colliding, gravity_part, k_normal, k_tangent, threshold)
+    return _collide(bodies, contacts, colliding, gravity_part, k_normal, k_tangent, threshold,
+                    v_rel[colliding])
 
 
 def _resting_target(contacts, h):
@@ -272,11 +273,14 @@ def _resting_target(contacts, h):
     return -np.maximum(contacts.gap, 0) / h
 
 
-def _collide(bodies, contacts, index, gravity_part, k_normal, k_tangent, threshold):
-    """Collision impulses for contacts ``index``, applied; None if none of them collides."""
+def _collide(bodies, contacts, index, gravity_part, k_normal, k_tangent, threshold,
+             v_rel=None):
+    """Collision impulses for contacts ``index``, applied; None if none of them collides.
+    ``v_rel`` is their relative velocity where the caller has it already (the same values)."""
     a, b, n = contacts.a[index], contacts.b[index], contacts.normal[index]
     ra, rb = contacts.radius_a[index], contacts.radius_b[index]
-    v_rel = relative_velocity(bodies, a, b, n, ra, rb, contacts.surface_velocity[index])
+    if v_rel is None:
+        v_rel = relative_velocity(bodies, a, b, n, ra, rb, contacts.surface_velocity[index])
     impulse, j, approach = collision_impulse(
         v_rel, n, gravity_part[index], contacts.restitution[index], contacts.friction[index],
         k_normal[index], k_tangent[index], threshold)

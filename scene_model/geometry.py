@@ -12,7 +12,8 @@ def dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     linalg.norm: those may sum in an order that depends on the memory layout or the batch
     size, and a pixel's value must not depend on which other rays were traced with it.
     """
-    return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1] + a[..., 2] * b[..., 2]
+    products = a * b                # the three products at once: fewer NumPy calls, same sums
+    return products[..., 0] + products[..., 1] + products[..., 2]
 
 
 def normalize(v: np.ndarray) -> np.ndarray:
