@@ -94,7 +94,7 @@ GROUP = 64               # local_size_x of the shader
 
 STAGES = dict(begin=0, collide_count=1, collide_apply=2, warm_start=3, rest=4, positions=5,
               finish=6, grid_count=7, grid_scan=8, grid_scan_blocks=9, grid_scatter=10,
-              grid_scan_add=11)
+              grid_scan_add=11, order_scan=12, order_scatter=13)
 INTEGRATOR_CODES = {"explicit": 0, "semi_implicit": 1, "verlet": 2}
 # The shader's event kinds, in the order the CPU records the events of one collision sweep.
 EVENT_KINDS = np.array(["sphere-plane", "sphere-shape", "sphere-sphere", "left-bounds"])
@@ -123,7 +123,7 @@ GPU_EVENT_DTYPE = np.dtype([("step", "<i4"), ("stage", "<i4"), ("kind", "<i4"), 
                             ("other", "<i4"), ("speed", "<f4"), ("impulse", "<f4"),
                             ("slot", "<i4")])
 MOTION_BYTES, CONTACT_BYTES = 32, CONTACT_DTYPE.itemsize
-STORAGE_BUFFERS = 10     # bindings 0 .. 9 of the shader
+STORAGE_BUFFERS = 11     # bindings 0 .. 10 of the shader
 PARAMETERS_BINDING = 0   # the uniform block of the shapes' numbers (physics_shapes.py)
 
 
@@ -216,6 +216,9 @@ class GpuStepper:
             self.cell_starts = self.ctx.buffer(bytes(4 * (self.table_size + 1)))
             self.block_starts = self.ctx.buffer(bytes(4 * (blocks + 1)))
             self.grid_entries = self.ctx.buffer(reserve=16 * n)
+            # the solver's order of the bodies: counts (start empty; the scan empties them
+            # again), starts, then 2 N ints (glsl/physics_step.glsl, Order)
+            self.order = self.ctx.buffer(bytes(4 * (2 * (MAX_CONTACTS + 1) + 2 * n)))
             self.parameters = self.ctx.buffer(shapes.parameters.tobytes())
             self._set_constants()         # uniforms are set on the current context
 
@@ -233,7 +236,7 @@ class GpuStepper:
             self.world.steps += steps
 
     BUFFERS = ("bodies", "motion", "contacts", "planes", "counters", "events", "cell_counts",
-               "cell_starts", "block_starts", "grid_entries", "parameters")
+               "cell_starts", "block_starts", "grid_entries", "order", "parameters")
 
     def release(self) -> None:
         """Free the programs and buffers (moderngl does not free them when collected)."""
@@ -284,7 +287,7 @@ class GpuStepper:
         for index, buffer in enumerate((self.bodies, self.motion, self.contacts, self.planes,
                                         self.counters, self.events, self.cell_counts,
                                         self.cell_starts, self.block_starts,
-                                        self.grid_entries)):
+                                        self.grid_entries, self.order)):
             buffer.bind_to_storage_buffer(index)
         self.parameters.bind_to_uniform_block(PARAMETERS_BINDING)
         self._dispatch("grid_count")              # the broad phase: sort the bodies by cell
@@ -293,6 +296,8 @@ class GpuStepper:
         self._dispatch("grid_scan_add", invocations=self.table_size + 1)
         self._dispatch("grid_scatter")
         self._dispatch("begin")
+        self._dispatch("order_scan", invocations=1)   # the solver's bodies by contact count
+        self._dispatch("order_scatter")
         read = 0                                  # velocity slot holding v*
         for k in range(iterations):               # collision sweeps
             self._dispatch("collide_count", read, k)

@@ -11,6 +11,7 @@
 //   STAGE_GRID_COUNT .. _SCATTER the broad phase: bodies sorted by grid   (physics_grid.glsl)
 //                               cell
 //   STAGE_BEGIN                 integrate velocities, find contacts        (World._step 1, 2)
+//   STAGE_ORDER_SCAN, _SCATTER  the solver's order of the bodies (Order, below)
 //   STAGE_COLLIDE_COUNT, _APPLY collision sweep k = 0 .. iterations-1      (_collide_together)
 //   STAGE_WARM_START            last step's resting impulses               (_apply_warm_start)
 //   STAGE_REST                  resting pass k = 0 .. iterations-1         (_rest)
@@ -55,6 +56,8 @@ layout(local_size_x = 64) in;
 #define STAGE_GRID_SCAN_BLOCKS 9
 #define STAGE_GRID_SCATTER 10
 #define STAGE_GRID_SCAN_ADD 11
+#define STAGE_ORDER_SCAN 12
+#define STAGE_ORDER_SCATTER 13
 
 // Event kinds, numbered in the order the CPU records the events of one collision sweep
 // (gpu_shader.physics.EVENT_KINDS).
@@ -149,6 +152,16 @@ layout(std430, binding = 6) buffer CellCounts { uint cell_count[]; };    // u_ta
 layout(std430, binding = 7) buffer CellStarts { uint cell_start[]; };    // u_table_size + 1
 layout(std430, binding = 8) buffer BlockStarts { uint block_start[]; };  // blocks + 1
 layout(std430, binding = 9) buffer GridEntries { ivec4 grid_entries[]; }; // N: cell, body
+// The order in which the solver's dispatches take the bodies: by their number of contacts.
+// Each invocation of a sweep or pass loops over one body's contacts, and llvmpipe runs 8
+// invocations in step, for as long as the one with the most contacts; bodies with neighbouring
+// indices lie anywhere in a pile, with 0 to a dozen contacts. Which body an invocation takes
+// changes no result: each writes only its own body's rows.
+layout(std430, binding = 10) buffer Order {
+    uint order_count[MAX_CONTACTS + 1];   // bodies with each number of contacts (begin_step)
+    uint order_start[MAX_CONTACTS + 1];   // where each count's bodies start in `order`
+    int order[];                          // 2 N: the bodies by contact count; each body's rank
+};
 
 uniform int u_pass;          // the sweep or resting pass this dispatch runs
 uniform int u_read;          // velocity slot read by this dispatch (0 or 1)
@@ -609,6 +622,8 @@ void begin_step(int i) {
         }
     }
     bodies[i].contact_count[u_list] = count;
+    // its place among the bodies with as many contacts (Order)
+    order[u_count + i] = int(atomicAdd(order_count[count], 1u));
     bodies[i].landing_count = landing;
 }
 
@@ -1014,8 +1029,28 @@ void finish_step(int i) {
     }
 }
 
+// STAGE_ORDER_SCAN, one invocation: where the bodies of each contact count start in `order`
+// (an exclusive prefix sum), the counts emptied for the next step.
+void order_scan() {
+    uint running = 0u;
+    for (int c = 0; c <= MAX_CONTACTS; c++) {
+        order_start[c] = running;
+        running += order_count[c];
+        order_count[c] = 0u;
+    }
+}
+
+// STAGE_ORDER_SCATTER: body i at its place in `order`.
+void order_scatter(int i) {
+    order[order_start[bodies[i].contact_count[u_list]] + uint(order[u_count + i])] = i;
+}
+
 void main() {
     int i = int(gl_GlobalInvocationID.x);
+    if (STAGE == STAGE_ORDER_SCAN) {                     // one invocation
+        if (i == 0) order_scan();
+        return;
+    }
     if (STAGE == STAGE_GRID_SCAN) {                      // one invocation per block of slots
         if (i < u_table_size / u_scan_block) scan_block(i);
         return;
@@ -1029,6 +1064,11 @@ void main() {
         return;
     }
     if (i >= u_count) return;                              // the others: one per body
+    if (STAGE == STAGE_COLLIDE_COUNT || STAGE == STAGE_COLLIDE_APPLY
+            || STAGE == STAGE_WARM_START || STAGE == STAGE_REST) {
+        i = order[i];                                      // the solver's order (Order)
+    }
+    if (STAGE == STAGE_ORDER_SCATTER) order_scatter(i);
     if (STAGE == STAGE_GRID_COUNT) grid_count(i);
     else if (STAGE == STAGE_GRID_SCATTER) grid_scatter(i);
     else if (STAGE == STAGE_BEGIN) begin_step(i);
