@@ -16,11 +16,11 @@ Prints two Markdown tables for docs/performance.md.
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import statistics
 import time
 
 import marchlab
+from bench_prepass import alternating_times, with_settings
 from gpu_shader.render import _renderer
 from marchlab.cli import parse_size
 from scene_model.scene import rendered_scene
@@ -47,23 +47,15 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=7)
     args = parser.parse_args()
     width, height = args.size
-    scene = rendered_scene(load_scene(args.scene))
-    scene = dataclasses.replace(scene, render=dataclasses.replace(scene.render, prepass="cone"))
-    variants = {name: dataclasses.replace(scene, render=dataclasses.replace(scene.render, **c))
-                for name, c in VARIANTS.items()}
-    for variant in variants.values():                 # compile every program first
-        marchlab.render(variant, width, height, backend="gpu")
-    seconds = {name: [] for name in variants}
-    for _ in range(args.repeat):
-        for name, variant in variants.items():
-            start = time.perf_counter()
-            marchlab.render(variant, width, height, backend="gpu")
-            seconds[name].append(time.perf_counter() - start)
+    scene = with_settings(rendered_scene(load_scene(args.scene)), prepass="cone")
+    variants = {name: with_settings(scene, **c) for name, c in VARIANTS.items()}
+    medians = alternating_times(list(variants.values()), width, height, "gpu", "float32",
+                                args.repeat)
     print(f"{args.scene} at {width}x{height}, gpu backend, ms per frame (median of "
           f"{args.repeat}):\n")
     print("| frame | ms |\n|---|---:|")
-    for name, s in seconds.items():
-        print(f"| {name} | {median_ms(s):.1f} |")
+    for name, median in zip(variants, medians):
+        print(f"| {name} | {1000 * median:.1f} |")
 
     one_step = variants["one step, depth shading"]
     renderer = _renderer()

@@ -13,12 +13,13 @@ are shared and noisy: compare the ratios of one run.
 from __future__ import annotations
 
 import argparse
+import functools
 import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-from bench_prepass import parse_size  # noqa: E402
+from bench_prepass import alternating_medians, parse_size  # noqa: E402
 from bench_render import cpu_name  # noqa: E402
 import marchlab  # noqa: E402
 from scene_model.scenefile import bundled_scene_names, load_scene  # noqa: E402
@@ -28,17 +29,9 @@ BACKENDS = (("gpu", "float32"), ("opencl", "float64"))
 
 def frame_times(scene, width, height, repeat) -> list[float]:
     """Median seconds per frame of each of BACKENDS on ``scene``, rendered in turn."""
-    import statistics
-    import time
-    seconds = [[] for _ in BACKENDS]
-    for backend, precision in BACKENDS:
-        marchlab.render(scene, width, height, backend=backend, precision=precision)
-    for _ in range(repeat):
-        for i, (backend, precision) in enumerate(BACKENDS):
-            start = time.perf_counter()
-            marchlab.render(scene, width, height, backend=backend, precision=precision)
-            seconds[i].append(time.perf_counter() - start)
-    return [statistics.median(s) for s in seconds]
+    return alternating_medians(
+        [functools.partial(marchlab.render, scene, width, height, backend=backend,
+                           precision=precision) for backend, precision in BACKENDS], repeat)
 
 
 def main() -> None:

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import functools
 import statistics
 import time
 
@@ -64,13 +65,22 @@ def times(scene, width, height, backend, precision, repeat):
 def alternating_times(variants, width, height, backend, precision, repeat):
     """Median seconds per frame of each scene of ``variants``, rendered in turn ``repeat``
     times after one warm-up frame each (which compiles their programs)."""
-    seconds = [[] for _ in variants]
-    for variant in variants:
-        marchlab.render(variant, width, height, backend=backend, precision=precision)
+    return alternating_medians(
+        [functools.partial(marchlab.render, variant, width, height, backend=backend,
+                           precision=precision) for variant in variants], repeat)
+
+
+def alternating_medians(draws, repeat):
+    """Median seconds of each call of ``draws`` (callables without arguments), called in
+    turn ``repeat`` times after one warm-up call each, so that a busy moment of a shared
+    machine hits all of them."""
+    seconds = [[] for _ in draws]
+    for draw in draws:
+        draw()
     for _ in range(repeat):
-        for i, variant in enumerate(variants):
+        for i, draw in enumerate(draws):
             start = time.perf_counter()
-            marchlab.render(variant, width, height, backend=backend, precision=precision)
+            draw()
             seconds[i].append(time.perf_counter() - start)
     return [statistics.median(s) for s in seconds]
 

@@ -242,8 +242,12 @@ int event_other(int other) {
     return is_plane(other) ? plane_of(other) : is_shape(other) ? shape_of(other) : other;
 }
 
-// The bodies of a contact of body i in the CPU's orientation: a is the lower index (or the
-// sphere of a contact with the static world), b the higher (or -1, the static world).
+// Whether body i is a of its contact with `other` in the CPU's orientation: a is the lower
+// index, or the sphere of a contact with the static world (other < 0).
+bool is_a(int i, int other) { return other < 0 || i < other; }
+
+// The bodies of a contact of body i in that orientation: a, and b (the higher index, or -1
+// for the static world).
 void contact_bodies(int i, int other, out int a, out int b) {
     if (other < 0) { a = i; b = -1; }
     else { a = min(i, other); b = max(i, other); }
@@ -640,8 +644,8 @@ void collide_count(int i) {
     for (int c = 0; c < count; c++) {
         Contact k = contacts[start + c];
         Other o = other_body(k.other, k.surface_velocity);
-        vec3 v_rel = relative_velocity(k.other < 0 || i < k.other, v_i, w_i, r_i, o,
-                                       k.normal_gap.xyz, k.surface_velocity.xyz);
+        vec3 v_rel = relative_velocity(is_a(i, k.other), v_i, w_i, r_i, o, k.normal_gap.xyz,
+                                       k.surface_velocity.xyz);
         if (k.gravity_part - dot3(v_rel, k.normal_gap.xyz) > u_threshold) colliding++;
     }
     bodies[i].colliding = colliding;
@@ -665,7 +669,7 @@ void collide_apply(int i) {
         int start = list_start(i, u_list), count = bodies[i].contact_count[u_list];
         for (int c = 0; c < count; c++) {
             Contact k = contacts[start + c];
-            bool first = k.other < 0 || i < k.other;
+            bool first = is_a(i, k.other);
             Other o = other_body(k.other, k.surface_velocity);
             vec3 n = k.normal_gap.xyz;
             vec3 v_rel = relative_velocity(first, v_i, w_i, r_i, o, n, k.surface_velocity.xyz);
@@ -698,8 +702,7 @@ void warm_start_apply(int i) {
         vec3 n = k.normal_gap.xyz;
         vec3 tangent = k.tangent_total.xyz - dot3(k.tangent_total.xyz, n) * n;
         contacts[start + c].tangent_total.xyz = tangent;
-        apply_impulse(k.other < 0 || i < k.other, n, k.normal_total * n + tangent, applied,
-                      v, w);
+        apply_impulse(is_a(i, k.other), n, k.normal_total * n + tangent, applied, v, w);
     }
     vec2 masses = shared_masses(i, float(count));
     motion[(1 - u_read) * u_count + i] = Motion(vec4(v, masses.x), vec4(w, masses.y));
@@ -721,7 +724,7 @@ void rest_pass(int i) {
         float change = 0.0;
         for (int c = 0; c < count; c++) {                 // a's contacts first, then b's
             Contact k = contacts[start + c];
-            bool first = k.other < 0 || i < k.other;
+            bool first = is_a(i, k.other);
             Other o = other_body(k.other, k.surface_velocity);
             vec3 n = k.normal_gap.xyz;
             vec3 v_rel = relative_velocity(first, v_i, w_i, r_i, o, n, k.surface_velocity.xyz);
@@ -1069,7 +1072,7 @@ void main() {
         i = order[i];                                      // the solver's order (Order)
     }
     if (STAGE == STAGE_ORDER_SCATTER) order_scatter(i);
-    if (STAGE == STAGE_GRID_COUNT) grid_count(i);
+    else if (STAGE == STAGE_GRID_COUNT) grid_count(i);
     else if (STAGE == STAGE_GRID_SCATTER) grid_scatter(i);
     else if (STAGE == STAGE_BEGIN) begin_step(i);
     else if (STAGE == STAGE_COLLIDE_COUNT) collide_count(i);
