@@ -18,6 +18,12 @@ finds its points, the exact test where there is one, samples where there is not:
                      SDF is convex along the segment: a ternary search finds it)  exact
     capsule-capsule  the segments' nearest points, and each end against the
                      other segment (two points for capsules lying side by side)  exact
+    convex-plane     its surface samples (convex.py), and its support point along
+                     the plane's -n                                              exact
+    convex-shape,    its samples in the other's SDF and the other's samples in
+    convex-body      its (both ways), and its point nearest the other
+                     (convex_contacts.py)                                        sampled
+    sphere-convex    the centre in the body's SDF: gap = d(x) - r                exact
 
 ("One body's SDF at the other's surface samples", Guendelman, Bridson and Fedkiw,
 "Nonconvex rigid bodies with stacking", SIGGRAPH 2003, section 5: a sampled surface touches
@@ -43,14 +49,20 @@ from dataclasses import dataclass
 import numpy as np
 
 from physics.box_contacts import box_box_contacts
-from physics.colliders import FALLBACK_NORMAL, surface_near
+from physics.colliders import FALLBACK_NORMAL, shape_normals, surface_near
+from physics.convex_contacts import body_distance, contact_patch
 from physics.quaternions import rotation_matrices
-from physics.solids import (BOX, CAPSULE, CAPSULE_SAMPLES, KIND_NAMES, SPHERE, box_distance,
-                            box_points, bounding_radius, capsule_ends, segment_closest,
-                            segments_closest)
+from physics.solids import (BOX, CAPSULE, CAPSULE_SAMPLES, CONVEX, KIND_NAMES, SPHERE,
+                            box_distance, box_points, bounding_radius, capsule_ends,
+                            segment_closest, segments_closest)
 from scene_model.geometry import dot
 
 FEATURES = 4096          # features per pair in a contact key (box_contacts stays below it)
+# A pair's features: the first body's samples from 0, the second's from OTHER_SAMPLES, a
+# convex body's contact patch (convex_contacts.py) from PATCH_FEATURE, the second body's
+# from PATCH_FEATURE + PATCH_OTHER.
+OTHER_SAMPLES = 2048
+PATCH_FEATURE, PATCH_OTHER = FEATURES - 64, 32
 SCAN_POINTS = 17         # points along a capsule's segment looked at first for its nearest
 TERNARY_STEPS = 24       # then this many steps, each keeping 2/3 of the bracket: 1e-5 of it
 END_SKIP = 0.01          # the nearest point within this fraction of an end: the end's contact
@@ -269,8 +281,9 @@ def support_points(world, rows, which: str, pose=None):
     """Points of bodies ``rows`` that meet a plane or an SDF first: (body (K,), point (K, 3),
     radius (K,), feature (K,)). Boxes: their corners (``which = "corners"``) or 26 surface
     points (``"surface"``), radius 0. Capsules: their two ends, or CAPSULE_SAMPLES points along
-    the segment, with the capsule's radius. ``pose`` = (position (N, 3), orientation (N, 4))
-    places the bodies elsewhere than the world has them (a swept test's time of impact)."""
+    the segment, with the capsule's radius. Convex bodies: their surface samples either way,
+    radius 0. ``pose`` = (position (N, 3), orientation (N, 4)) places the bodies elsewhere
+    than the world has them (a swept test's time of impact)."""
     dtype = world.dtype
     position, orientation = (world.position, world.orientation) if pose is None else pose
     body, point, radius, feature = [], [], [], []
@@ -294,6 +307,16 @@ def support_points(world, rows, which: str, pose=None):
         point.append(where.reshape(-1, 3))
         radius.append(np.repeat(world.radius[capsules], len(t)))
         feature.append(np.tile(np.arange(len(t)), len(capsules)))
+    for j in rows[world.kind[rows] == CONVEX]:
+        local = world.solids[world.solid_of[j]].samples
+        rotation = rotation_matrices(np.asarray(orientation[j:j + 1], np.float64))[0]
+        body.append(np.full(len(local), j))
+        point.append(np.asarray(position[j], np.float64) + local @ rotation.T)
+        radius.append(np.zeros(len(local), dtype))
+        feature.append(np.arange(len(local)))
+    if not body:
+        return (np.zeros(0, np.int64), np.zeros((0, 3), dtype), np.zeros(0, dtype),
+                np.zeros(0, np.int64))
     return (np.concatenate(body), np.concatenate(point).astype(dtype),
             np.concatenate(radius).astype(dtype), np.concatenate(feature))
 
@@ -303,7 +326,8 @@ def _kind(world, body) -> np.ndarray:
 
 
 def _plane_contacts(world, solids, margin, pose=None) -> list:
-    body, point, radius, feature = support_points(world, solids, "corners", pose)
+    plain = solids[world.kind[solids] != CONVEX]       # a convex body has its patch instead
+    body, point, radius, feature = support_points(world, plain, "corners", pose)
     n = world.count
     parts = []
     for plane, (normal, offset) in enumerate(zip(world.plane_normal, world.plane_offset)):
@@ -316,14 +340,57 @@ def _plane_contacts(world, solids, margin, pose=None) -> list:
             point[near] - radius[near, None] * normal, np.tile(normal, (len(rows), 1)),
             gap[near], np.maximum(world.restitution[rows], world.plane_restitution[plane]),
             np.sqrt(world.friction[rows] * world.plane_friction[plane])))
+        for j in solids[world.kind[solids] == CONVEX]:
+            def plane_distance(p, normal=normal, offset=offset):
+                return (p @ normal - offset, np.tile(np.asarray(normal, np.float64),
+                                                     (len(p), 1)))
+            patch = _patch(world, j, plane_distance, margin[j], pose)
+            if patch is not None:
+                point_j, gap_j, _, feature_j = patch
+                count = len(gap_j)
+                parts.append(_part(
+                    np.full(count, j), np.full(count, n), plane, n + 1 + plane,
+                    "convex-plane", feature_j, point_j, np.tile(normal, (count, 1)), gap_j,
+                    max(world.restitution[j], world.plane_restitution[plane]),
+                    np.sqrt(world.friction[j] * world.plane_friction[plane])))
     return parts
 
 
+def _patch(world, j, other_distance, reach, pose=None):
+    """Convex body j's contact patch (convex_contacts.contact_patch) with the solid of
+    ``other_distance``, searched from j's sample nearest it: (points, gaps, normals,
+    features) of the patch points within ``reach``, or None."""
+    centre = (world.position if pose is None else pose[0])[j:j + 1]
+    if other_distance(centre)[0][0] - world.radius[j] > reach:
+        return None                            # its bounding sphere is out of reach
+    _, samples, _, _ = support_points(world, np.array([j]), "surface", pose)
+    start = samples[np.argmin(other_distance(samples)[0])]
+    point, gap, normal, patch = contact_patch(world, j, other_distance, start, world.slop,
+                                              pose)
+    near = gap <= reach
+    if not near.any():
+        return None
+    return point[near], gap[near], normal[near], PATCH_FEATURE + patch[near]
+
+
 def _shape_contacts(world, shapes, solids, margin, pose=None) -> list:
-    body, point, radius, feature = support_points(world, solids, "surface", pose)
+    plain = solids[world.kind[solids] != CONVEX]
+    body, point, radius, feature = support_points(world, plain, "surface", pose)
     n, planes = world.count, len(world.plane_offset)
     parts = []
     for index, shape in enumerate(shapes):
+        for j in solids[world.kind[solids] == CONVEX]:
+            patch = _patch(world, j, _shape_distance(shape), margin[j], pose)
+            if patch is not None:
+                point_j, gap_j, normal_j, feature_j = patch
+                count = len(gap_j)
+                e, mu = shape.coefficients(point_j)
+                parts.append(_part(
+                    np.full(count, j), np.full(count, n), index, n + 1 + planes + index,
+                    "convex-shape", feature_j, point_j, normal_j, gap_j,
+                    np.maximum(world.restitution[j], e),
+                    np.sqrt(world.friction[j] * np.asarray(mu, world.dtype)),
+                    shape.surface_velocity(point_j.astype(world.dtype))))
         distance = np.asarray(shape.distance(point), world.dtype)
         near = np.flatnonzero(distance - radius <= margin[body])
         if len(near) == 0:
@@ -339,6 +406,14 @@ def _shape_contacts(world, shapes, solids, margin, pose=None) -> list:
             np.sqrt(world.friction[rows] * np.asarray(mu, world.dtype)),
             shape.surface_velocity(touch)))
     return parts
+
+
+def _shape_distance(shape):
+    """``points -> (distance, normal)`` of a shape, in float64."""
+    def distance(p):
+        return (np.asarray(shape.distance(p), np.float64),
+                np.asarray(shape_normals(shape, p), np.float64))
+    return distance
 
 
 def _body_contacts(world, solids, margin) -> list:
@@ -376,6 +451,8 @@ def _sphere_solid(world, spheres, s, margin) -> dict:
         local = (centre - x[s]) @ rotation
         distance, gradient = box_distance(local, np.broadcast_to(world.extent[s], local.shape))
         normal = gradient @ rotation.T
+    elif world.kind[s] == CONVEX:
+        distance, normal = body_distance(world, s, centre)
     else:
         start, end = capsule_ends(x[s:s + 1], world.orientation[s:s + 1], world.extent[s:s + 1])
         start, end = np.repeat(start, len(spheres), 0), np.repeat(end, len(spheres), 0)
@@ -405,12 +482,46 @@ def _apart(p, q):
 def _solid_solid(world, s, j, reach) -> dict:
     """Contacts of two solids, s before j in the world."""
     kinds = (int(world.kind[s]), int(world.kind[j]))
+    if CONVEX in kinds:
+        return _sampled_pair(world, s, j, reach)
     if kinds == (BOX, BOX):
         return _box_box(world, s, j, reach)
     if kinds == (CAPSULE, CAPSULE):
         return _capsule_capsule(world, s, j, reach)
     capsule, box = (s, j) if kinds[0] == CAPSULE else (j, s)
     return _capsule_box(world, capsule, box, reach)
+
+
+def _sampled_pair(world, a, b, reach) -> dict:
+    """Two bodies, one of them convex or both: a convex one's contact patch with the other
+    (convex_contacts.py), the other's surface samples in its SDF. The normal is b's outward
+    one at a's points, the reverse of a's at b's."""
+    e, mu = _coefficients(world, a, b)
+    chosen = []                      # (features, points, normals from b to a, gaps) batches
+    for mine, other, sign, first in ((a, b, 1.0, 0), (b, a, -1.0, OTHER_SAMPLES)):
+        def other_distance(p, other=other):
+            return body_distance(world, other, p)
+        if world.kind[mine] == CONVEX:
+            patch = _patch(world, mine, other_distance, reach)
+            if patch is not None:
+                point, gap, normal, feature = patch
+                chosen.append((feature + (mine == b) * PATCH_OTHER, point, sign * normal, gap))
+            continue
+        _, point, radius, feature = support_points(world, np.array([mine]), "surface")
+        distance, normal = other_distance(point)
+        # The point of the sample's surface nearest the other.
+        chosen.append((first + feature, point - radius[:, None] * normal, sign * normal,
+                       distance - radius))
+    if not chosen:
+        return _part([], [], b, b, "", [], np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0),
+                     e, mu)
+    feature, point, normal, gap = (np.concatenate(column) for column in zip(*chosen))
+    near = gap <= reach
+    count = int(near.sum())
+    kind = f"{KIND_NAMES[world.kind[a]]}-{KIND_NAMES[world.kind[b]]}"
+    return _part(np.full(count, a), np.full(count, b), b, b, kind, feature[near],
+                 point[near].astype(world.dtype), normal[near].astype(world.dtype),
+                 gap[near].astype(world.dtype), e, mu)
 
 
 def _box_box(world, a, b, reach) -> dict:

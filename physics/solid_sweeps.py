@@ -84,7 +84,9 @@ from physics.point_solver import PASSES_PER_ITERATION, PointBodies, solve_points
 from physics.quaternions import rotate_orientations, rotation_matrices, rotation_vector_between
 from physics.solid_contacts import (segment_nearest_box, speculative_distance, static_contacts,
                                     support_points)
-from physics.solids import (BOX, CAPSULE, SPHERE, box_distance, bounding_radius, capsule_ends,
+from physics.convex_contacts import sampled_gap
+from physics.solids import (BOX, CAPSULE, CONVEX, SPHERE, box_distance, bounding_radius,
+                            capsule_ends,
                             free_rotation, segment_closest, segments_closest, world_inertia,
                             world_inverse_inertia)
 from scene_model.geometry import dot
@@ -96,10 +98,11 @@ SWEEP_PASSES = 3         # impacts met and resolved per body and step; at the ne
 
 def lever(world) -> np.ndarray:
     """How far (m) a point that decides a body's gap can be from its centre, (N,): a box's
-    corner, a capsule's segment end; 0 for a sphere (its gap does not turn with it)."""
+    corner, a capsule's segment end, a convex body's farthest point; 0 for a sphere (its gap
+    does not turn with it)."""
     corner = np.sqrt(dot(world.extent, world.extent))
-    return np.select([world.kind == BOX, world.kind == CAPSULE],
-                     [corner, world.extent[:, 1]], 0).astype(world.dtype)
+    return np.select([world.kind == BOX, world.kind == CAPSULE, world.kind == CONVEX],
+                     [corner, world.extent[:, 1], world.radius], 0).astype(world.dtype)
 
 
 def advance(gap, rate, duration, target, tolerance, counter=None, start_gap=None):
@@ -236,7 +239,11 @@ def sweep_statics(world, shapes, sweep: Sweep, reach, counter):
         half a slop, or a slop deeper than it started for a contact that sinks."""
         start, row, feature = gaps(which, distance, everything, np.zeros(k, dtype))
         end = gaps(which, distance, everything, sweep.duration)[0]
-        contact = start <= reach[sweep.body[row]]
+        # A convex body's contacts are its patch, not its samples (convex_contacts.py): a
+        # sample that turning alone could bring down to the surface this step is one the
+        # patch holds up (a rolling cylinder's next bottom line), so it counts as a contact.
+        turning = np.where(world.kind[sweep.body] == CONVEX, spin_reach * sweep.duration, 0)
+        contact = start <= reach[sweep.body[row]] + turning[row]
         aim_here = np.where(contact, np.minimum(start, 0) - world.slop, target)
         settled = contact & (end >= aim_here)      # a contact that does not sink: the solver's
         aim = np.full((k, feature.max() + 1 if len(feature) else 0), np.inf, dtype)
@@ -386,7 +393,24 @@ def sweep_solids(world, shapes, sweep: Sweep, reach, h, counter):
 
 def pair_gaps(world, a, b, position_a, orientation_a, position_b, orientation_b):
     """Lower bounds (K,) of the distance (m) between bodies a (K,) and b (K,) placed at the
-    given positions (K, 3) and orientations (K, 4); not both spheres (module docstring)."""
+    given positions (K, 3) and orientations (K, 4); not both spheres (module docstring).
+    A pair with a convex body has the least gap of either's samples in the other's SDF."""
+    kind_a, kind_b = world.kind[a], world.kind[b]
+    gap = np.zeros(len(a), world.dtype)
+    convex = (kind_a == CONVEX) | (kind_b == CONVEX)
+    for row in np.flatnonzero(convex):
+        gap[row] = sampled_gap(world, a[row], b[row], position_a[row], orientation_a[row],
+                               position_b[row], orientation_b[row])
+    if convex.all():
+        return gap
+    rest = np.flatnonzero(~convex)
+    gap[rest] = _analytic_pair_gaps(world, a[rest], b[rest], position_a[rest],
+                                    orientation_a[rest], position_b[rest], orientation_b[rest])
+    return gap
+
+
+def _analytic_pair_gaps(world, a, b, position_a, orientation_a, position_b, orientation_b):
+    """`pair_gaps` of pairs of spheres, boxes and capsules."""
     kind_a, kind_b = world.kind[a], world.kind[b]
     gap = np.zeros(len(a), world.dtype)
     # Put the sphere, then the capsule, first: a pair is (lower kind, higher kind) in

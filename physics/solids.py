@@ -1,13 +1,15 @@
 """Bodies that are not spheres: boxes and capsules, their mass, inertia and distance functions.
 
-Every body of a `World` has a kind (`SPHERE`, `BOX`, `CAPSULE`) and, besides its radius, an
-``extent`` (3,) in its own frame::
+Every body of a `World` has a kind (`SPHERE`, `BOX`, `CAPSULE`, `CONVEX`) and, besides its
+radius, an ``extent`` (3,) in its own frame::
 
     sphere    radius r                      extent (0, 0, 0)
     box       half sizes (a, b, c)          extent (a, b, c); radius = |(a, b, c)|, the
                                             bounding sphere's
     capsule   radius r around the segment   extent (0, l, 0): the segment runs from
               from -l to +l along local y   (0, -l, 0) to (0, +l, 0)
+    convex    any convex SDF (convex.py)    extent: half sizes of the box holding its
+                                            samples; radius: a sphere's holding it all
 
 A body's orientation q (a unit quaternion) turns its own frame into the world's: a point p of
 the body is at x + R(q) p. Its inertia is a tensor, diagonal in its own frame with the
@@ -36,8 +38,8 @@ import numpy as np
 from physics.quaternions import (quaternion_from_rotation_vector, quaternion_multiply,
                                  rotation_matrices)
 
-SPHERE, BOX, CAPSULE = 0, 1, 2
-KIND_NAMES = ("sphere", "box", "capsule")
+SPHERE, BOX, CAPSULE, CONVEX = 0, 1, 2, 3
+KIND_NAMES = ("sphere", "box", "capsule", "convex")
 CAPSULE_SAMPLES = 5       # points along a capsule's segment tested against an SDF shape
 
 
@@ -49,7 +51,7 @@ def volume(kind, radius, extent) -> np.ndarray:
     return np.select([kind == BOX, kind == CAPSULE], [box, capsule], sphere)
 
 
-def principal_inertia(kind, mass, radius, extent) -> np.ndarray:
+def principal_inertia(kind, mass, radius, extent, gyration=None) -> np.ndarray:
     """Principal moments of inertia (N, 3) in kg m^2, about the body's own x, y, z axes.
 
     Parameters
@@ -58,6 +60,9 @@ def principal_inertia(kind, mass, radius, extent) -> np.ndarray:
     mass, radius : (N,)
     extent : (N, 3)
         See the module docstring.
+    gyration : (N, 3), optional
+        A convex body's moments per unit mass, I / m (m^2, convex.py); needed where ``kind``
+        has one.
     """
     sphere = 0.4 * mass * radius * radius
     a, b, c = extent[:, 0], extent[:, 1], extent[:, 2]
@@ -69,12 +74,15 @@ def principal_inertia(kind, mass, radius, extent) -> np.ndarray:
     along = m_c * r * r / 2 + 0.4 * m_s * r * r
     across = m_c * (l * l / 3 + r * r / 4) + m_s * (0.4 * r * r + l * l + 0.75 * l * r)
     capsule = np.stack([across, along, across], axis=1)
-    return np.select([(kind == BOX)[:, None], (kind == CAPSULE)[:, None]], [box, capsule],
+    convex = mass[:, None] * (np.zeros_like(box) if gyration is None else gyration)
+    return np.select([(kind == BOX)[:, None], (kind == CAPSULE)[:, None],
+                      (kind == CONVEX)[:, None]], [box, capsule, convex],
                      np.repeat(sphere[:, None], 3, axis=1))
 
 
 def bounding_radius(kind, radius, extent) -> np.ndarray:
-    """Radius (N,) of the smallest sphere about the centre that holds each body (m)."""
+    """Radius (N,) of the smallest sphere about the centre that holds each body (m); a convex
+    body's radius is already one that holds it."""
     corner = np.sqrt(np.sum(extent * extent, axis=1))
     return np.select([kind == BOX, kind == CAPSULE], [corner, extent[:, 1] + radius], radius)
 

@@ -3,7 +3,7 @@
 Everything the simulation knows is an attribute a student can print: ``world.position`` is an
 (N, 3) array of centres, ``world.velocity`` their velocities, and so on. A step is the four
 stages of integrators.py written out in `World.step`, followed by the continuous collision
-tests (continuous.py for spheres, solid_sweeps.py for boxes and capsules), the push-out of
+tests (continuous.py for spheres, solid_sweeps.py for the other bodies), the push-out of
 overlaps, and the removal of bodies that leave the bounds.
 """
 
@@ -16,6 +16,7 @@ import numpy as np
 
 from physics.contacts import find_contacts, spread_coincident
 from physics.colliders import Shape
+from physics.convex import ConvexSolid
 from physics.continuous import bounce_off_statics, stop_sphere_sweeps
 from physics.errors import (PhysicsError, bounds_box, choice, column, finite, float_dtype, in_range,
                             positive, rows, vector3, whole_number)
@@ -28,8 +29,8 @@ from physics.quaternions import rotate_orientations, rotation_vector_between
 from physics.solid_contacts import (PointContacts, contact_reach, find_solid_contacts,
                                     join_point_contacts, sphere_point_contacts, with_levers)
 from physics.solid_sweeps import Sweep, lever, stop_solid_sweeps, sweep_solids
-from physics.solids import (BOX, CAPSULE, KIND_NAMES, SPHERE, free_rotation, principal_inertia,
-                            volume, world_inertia, world_inverse_inertia)
+from physics.solids import (BOX, CAPSULE, CONVEX, KIND_NAMES, SPHERE, free_rotation,
+                            principal_inertia, volume, world_inertia, world_inverse_inertia)
 from physics.solvers import SOLVERS, contact_keys, separate_overlaps, warm_start
 from scene_model.bodies import MAX_DT, MIN_DT
 from scene_model.geometry import dot
@@ -43,8 +44,8 @@ MAX_STEPS = 10 ** 9     # most steps one call may ask for: 1e9 steps are days of
 
 
 class World:
-    """Rigid spheres, boxes and capsules among static planes and shapes under uniform gravity,
-    stepped with a fixed dt.
+    """Rigid spheres, boxes, capsules and convex solids among static planes and shapes under
+    uniform gravity, stepped with a fixed dt.
 
     Parameters
     ----------
@@ -93,8 +94,11 @@ class World:
         self.position, self.velocity, self.angular_velocity = empty(3), empty(3), empty(3)
         self.orientation = empty(4)
         self.radius, self.mass, self.restitution, self.friction = empty(), empty(), empty(), empty()
-        self.kind = np.zeros(0, np.int8)  # SPHERE, BOX or CAPSULE (solids.py), one per body
+        self.kind = np.zeros(0, np.int8)  # SPHERE, BOX, CAPSULE or CONVEX (solids.py)
         self.extent = empty(3)            # a box's half sizes, (0, l, 0) for a capsule
+        self.gyration = empty(3)          # a convex body's principal I / m (m^2), else 0
+        self.solid_of = np.zeros(0, np.int64)   # a convex body's row of `solids`, else -1
+        self.solids: list[ConvexSolid] = []     # the convex bodies' shapes (convex.py)
         self.active = np.zeros(0, bool)
         self.plane_normal, self.plane_offset = empty(3), empty()
         self.plane_restitution, self.plane_friction = empty(), empty()
@@ -180,6 +184,8 @@ class World:
         self.active = np.concatenate([self.active, np.ones(m, bool)])
         self.kind = np.concatenate([self.kind, np.full(m, SPHERE, np.int8)])
         self.extent = grow(self.extent, np.zeros((m, 3)))
+        self.gyration = grow(self.gyration, np.zeros((m, 3)))
+        self.solid_of = np.concatenate([self.solid_of, np.full(m, -1, np.int64)])
         return np.arange(first, first + m)
 
     def add_box(self, position, half_size, orientation=(1.0, 0.0, 0.0, 0.0),
@@ -221,8 +227,40 @@ class World:
                                orientation, velocity, angular_velocity, mass, density,
                                restitution, friction)
 
+    def add_convex(self, position, solid: ConvexSolid, orientation=(1.0, 0.0, 0.0, 0.0),
+                   velocity=(0.0, 0.0, 0.0), angular_velocity=(0.0, 0.0, 0.0), mass=None,
+                   density=None, restitution=0.5, friction=0.5) -> int:
+        """Add one body of any convex shape and return its index among the bodies.
+
+        Parameters
+        ----------
+        position : (3,) array_like
+            Its centre of mass (m).
+        solid : physics.convex.ConvexSolid
+            Its shape in its own frame (`physics.convex.convex_solid`): origin at the centre
+            of mass, axes along the principal axes of inertia.
+        orientation : (4,) array_like
+            Unit quaternion turning its own (principal) axes into the world's.
+        mass, density : float, optional
+            Mass (kg) or density (kg/m^3, mass = density times ``solid.volume``); at most one.
+        velocity, angular_velocity, restitution, friction
+            As for `add_sphere`.
+        """
+        if not isinstance(solid, ConvexSolid):
+            raise PhysicsError(f"a convex body's shape must be a physics.convex.ConvexSolid "
+                               f"(got {type(solid).__name__})")
+        self.solids.append(solid)
+        try:
+            index = self._add_solid(CONVEX, position, solid.radius, solid.extent, orientation,
+                                    velocity, angular_velocity, mass, density, restitution,
+                                    friction, solid)
+        except PhysicsError:
+            self.solids.pop()
+            raise
+        return index
+
     def _add_solid(self, kind, position, radius, extent, orientation, velocity,
-                   angular_velocity, mass, density, restitution, friction) -> int:
+                   angular_velocity, mass, density, restitution, friction, solid=None) -> int:
         position = vector3(position, "position")
         q = np.asarray(orientation, np.float64)
         if q.shape != (4,) or not np.all(np.isfinite(q)) or not q @ q > 0:
@@ -231,11 +269,14 @@ class World:
         if mass is not None and density is not None:
             raise PhysicsError("give mass or density, not both")
         kinds, radii, extents = np.array([kind]), np.array([radius]), extent[None, :]
+        gyration = np.zeros(3) if solid is None else np.asarray(solid.gyration, np.float64)
         with np.errstate(over="ignore", under="ignore"):
             if density is not None:
-                mass = float(volume(kinds, radii, extents)[0]) * positive(density, "density")
+                size = (volume(kinds, radii, extents)[0] if solid is None else solid.volume)
+                mass = float(size) * positive(density, "density")
             mass = positive(1.0 if mass is None else mass, "mass")
-            moments = principal_inertia(kinds, np.array([mass]), radii, extents)[0]
+            moments = principal_inertia(kinds, np.array([mass]), radii, extents,
+                                        gyration[None, :])[0]
         with np.errstate(over="ignore", divide="ignore", under="ignore"):
             ok = np.isfinite(np.concatenate([[mass, 1 / mass], moments, 1 / moments])
                              .astype(self.dtype)).all()
@@ -258,6 +299,9 @@ class World:
         self.active = np.concatenate([self.active, [True]])
         self.kind = np.concatenate([self.kind, np.array([kind], np.int8)])
         self.extent = grow(self.extent, [extent])
+        self.gyration = grow(self.gyration, [gyration])
+        row = -1 if solid is None else len(self.solids) - 1
+        self.solid_of = np.concatenate([self.solid_of, np.array([row], np.int64)])
         return index
 
     def add_plane(self, normal, offset, restitution=0.0, friction=0.5) -> int:
@@ -326,7 +370,7 @@ class World:
     @property
     def principal_inertia(self) -> np.ndarray:
         """Principal moments of inertia (N, 3) in kg m^2, about each body's own axes."""
-        return principal_inertia(self.kind, self.mass, self.radius, self.extent)
+        return principal_inertia(self.kind, self.mass, self.radius, self.extent, self.gyration)
 
     def inverse_inertia_tensor(self) -> np.ndarray:
         """World-frame I^-1 (N, 3, 3) in 1/(kg m^2), for the bodies' present orientations."""
@@ -385,7 +429,8 @@ class World:
         if dtype is not None:
             other.dtype = float_dtype(dtype)
             for name in ("gravity", "position", "velocity", "angular_velocity", "orientation",
-                         "radius", "mass", "restitution", "friction", "extent", "plane_normal",
+                         "radius", "mass", "restitution", "friction", "extent", "gyration",
+                         "plane_normal",
                          "plane_offset", "plane_restitution", "plane_friction"):
                 setattr(other, name, getattr(other, name).astype(other.dtype))
             if other._resting_impulses is not None:
