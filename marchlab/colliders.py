@@ -13,12 +13,14 @@ material the renderer shows at the contact: its ``restitution`` and ``friction``
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import warnings
 
 import numpy as np
 
 from physics.colliders import Shape
+from physics.convex import ConvexSolid, convex_solid
 from reference_cpu.normals import estimate_normal
 from reference_cpu.scene_sdf import build_scene_sdf
 from scene_model.bodies import PhysicsSettings
@@ -128,6 +130,26 @@ def object_shape(node: Node, name: str, scene: Scene, settings: PhysicsSettings,
 
     return Shape(name, distance, normal, float(restitution[0]), float(friction[0]), surface,
                  normal_step=step)
+
+
+@functools.lru_cache(maxsize=64)
+def body_solid(node: Node) -> ConvexSolid:
+    """A convex body's solid (`physics.convex.convex_solid`): the renderer's SDF and normal
+    of ``node`` in float64, so the body the step moves has the surface the picture shows; its
+    mass, centre of mass, principal axes and surface samples computed from them. Kept per
+    node: the same solid for the world and for drawing it where the world has it.
+
+    Raises
+    ------
+    PhysicsError
+        A solid without volume.
+    """
+    sdf = build_scene_sdf([node], np.float64)
+    step = NORMAL_STEP[np.dtype(np.float64)]
+    centre, radius = bounding_sphere(node)
+    return convex_solid(node.kind, lambda p: sdf(np.asarray(p, np.float64))[0],
+                        lambda p: estimate_normal(sdf, np.asarray(p, np.float64), step),
+                        centre - radius, centre + radius)
 
 
 def unsafe_distance(node: Node) -> str | None:

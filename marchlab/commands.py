@@ -413,13 +413,14 @@ def render_frames(scene, positions, width: int, height: int, backend: str,
     """
     from scene_model.timeline import scene_at_time
     from .light_marks import mark_lights
-    from .simulation import body_rotations
+    from .simulation import drawn_poses
     images = []
     times = [None] * len(positions) if times is None else times
     with progress_bar(len(positions), unit="frame") as progress:
         for index, centres in enumerate(positions):
-            rotations = (None if orientations is None
-                         else body_rotations(orientations[index]))
+            rotations = None
+            if orientations is not None:
+                centres, rotations = drawn_poses(scene, centres, orientations[index])
             still = scene_at(scene, centres, times[index], rotations)
             if times[index] is not None:
                 still = scene_at_time(still, times[index])

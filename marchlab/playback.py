@@ -26,7 +26,7 @@ from scene_model.errors import MarchlabError, SceneError
 from scene_model.scene import Scene, scene_at
 
 from .render import backend_problem
-from .simulation import STEPPERS, body_rotations, build_world, physics_settings
+from .simulation import STEPPERS, build_world, drawn_poses, physics_settings
 
 MIN_TIME_SCALE, MAX_TIME_SCALE = 0.1, 4.0   # slow motion to fast forward
 # A stalled frame (a window dragged, a breakpoint) must not make the next one take seconds of
@@ -312,8 +312,9 @@ class Playback:
     def scene_now(self, blend: bool = False) -> Scene:
         """The scene with its bodies (and kinematic objects) where they are now, for a
         renderer."""
-        return scene_at(self.scene, self.positions(blend), self.world.time,
-                        body_rotations(self.world.orientation))
+        positions, rotations = drawn_poses(self.scene, self.positions(blend),
+                                           self.world.orientation)
+        return scene_at(self.scene, positions, self.world.time, rotations)
 
     def energy(self) -> float:
         """Kinetic (with rotational) plus potential energy -sum m g.x of the bodies still in

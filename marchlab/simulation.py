@@ -30,7 +30,8 @@ from scene_model.motion import euler_degrees
 from scene_model.scene import Scene
 
 from .budget import check_physics
-from .colliders import primitive_coefficients, scene_shapes, shape_objects, static_planes
+from .colliders import (body_solid, primitive_coefficients, scene_shapes, shape_objects,
+                        static_planes)
 
 PROGRESS_STEPS = 64        # physics steps between two progress reports
 
@@ -122,6 +123,14 @@ def build_world(scene: Scene, dtype=np.float64) -> physics.World:
                 elif body.shape == "capsule":
                     world.add_capsule(body.position, body.half_length, body.radius,
                                       orientation=turn, **common)
+                elif body.shape == "convex":
+                    # The world moves the centre of mass along the principal axes; the
+                    # scene places the solid's own origin and axes.
+                    solid = body_solid(body.solid)
+                    rotation = rotation_matrix(body.rotation)
+                    world.add_convex(np.asarray(body.position) + rotation @ solid.centroid,
+                                     solid, quaternion_from_matrix(rotation @ solid.axes),
+                                     **common)
                 else:
                     world.add_sphere(body.position, radius=body.radius, **common)
         except PhysicsError as err:
@@ -136,6 +145,22 @@ def build_world(scene: Scene, dtype=np.float64) -> physics.World:
 
 def _either(value, default):
     return default if value is None else value
+
+
+def drawn_poses(scene: Scene, centres, orientations):
+    """Where the renderers draw the bodies of ``scene`` whose world has them at ``centres``
+    (N, 3) turned by ``orientations`` (N, 4): positions (N, 3) and Euler degrees (N, 3) for
+    `scene_model.scene.scene_at`. A sphere, box or capsule is drawn at its centre; a convex
+    body's solid has its own origin and axes where the world's centre of mass and principal
+    axes put them (`build_world` did the reverse)."""
+    centres = np.array(centres, np.float64).reshape(-1, 3)
+    turns = rotation_matrices(np.asarray(orientations, np.float64).reshape(-1, 4))
+    for index, body in enumerate(scene.bodies):
+        if body.shape == "convex":
+            solid = body_solid(body.solid)
+            turns[index] = turns[index] @ solid.axes.T
+            centres[index] -= turns[index] @ solid.centroid
+    return centres, np.array([euler_degrees(turn) for turn in turns]).reshape(-1, 3)
 
 
 def body_rotations(orientations) -> np.ndarray:

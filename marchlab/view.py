@@ -576,10 +576,11 @@ class Viewer:
             still = scene_at_time(dataclasses.replace(scene, orbit=None), self.animation_time)
             scene = dataclasses.replace(still, camera=self.camera)
         if self.playback is not None:
-            from .simulation import body_rotations
+            from .simulation import drawn_poses
             world = self.playback.world
-            scene = scene_at(scene, self.playback.positions(), world.time,
-                             body_rotations(world.orientation))
+            positions, rotations = drawn_poses(scene, self.playback.positions(),
+                                               world.orientation)
+            scene = scene_at(scene, positions, world.time, rotations)
         return scene
 
     def check_against_reference(self, gpu_frame, background: bool = True):

@@ -1,9 +1,10 @@
 """The moving part of a scene: the ``[physics]`` settings and the dynamic bodies, ``[[bodies]]``.
 
-A `Body` is a solid sphere, box or capsule that the physics module moves and every renderer
-draws. It is plain data like the rest of the scene: `body_node` is the object drawn for it, and
-`scene_model.scene` puts the bodies into a scene (`scene_objects`, `scene_at`). Stepping the
-world is the physics engine's job (physics/, driven by marchlab/simulation.py).
+A `Body` is a solid sphere, box, capsule or any convex solid of the scene's nodes that the
+physics module moves and every renderer draws. It is plain data like the rest of the scene:
+`body_node` is the object drawn for it, and `scene_model.scene` puts the bodies into a scene
+(`scene_objects`, `scene_at`). Stepping the world is the physics engine's job (physics/,
+driven by marchlab/simulation.py).
 """
 
 from __future__ import annotations
@@ -14,13 +15,14 @@ from typing import Literal
 from .errors import SceneError
 from .fields import (MAX_DEGREES, MAX_SPEED, POINT, SIZE, SIZES, Each, Range, Record, Vec3, param,
                      unit_interval)
-from .shapes import Box, Capsule, Node, Rotate, Sphere, Translate
+from .bounds import bounding_sphere
+from .shapes import Box, Capsule, Node, Rotate, Sphere, Translate, is_convex
 
 # The names of the time-stepping schemes and contact solvers, here once: the scene format
 # accepts them, and physics.INTEGRATORS and physics.SOLVERS are keyed by them.
 INTEGRATOR_NAMES = ("semi_implicit", "explicit", "verlet")
 SOLVER_NAMES = ("sequential", "simultaneous")
-BODY_SHAPES = ("sphere", "box", "capsule")     # physics.solids.KIND_NAMES, in the same order
+BODY_SHAPES = ("sphere", "box", "capsule", "convex")   # physics.solids.KIND_NAMES, in order
 Integrator = Literal[INTEGRATOR_NAMES]
 Solver = Literal[SOLVER_NAMES]
 BodyShape = Literal[BODY_SHAPES]
@@ -64,12 +66,14 @@ class PhysicsSettings(Record):
 
 @dataclass(frozen=True)
 class Body(Record):
-    """A dynamic solid sphere, box or capsule: moved by the physics step and drawn as itself."""
+    """A dynamic solid sphere, box, capsule or convex solid: moved by the physics step and drawn
+    as itself."""
     shape: BodyShape = param("sphere", "Its shape: a sphere of ``radius``, a box of "
-                                       "``half_size``, or a capsule: the points within "
+                                       "``half_size``, a capsule: the points within "
                                        "``radius`` of a segment 2 ``half_length`` long along "
-                                       "its own y axis.")
-    position: Vec3 = param((0.0, 1.0, 0.0), "Centre at t = 0 (m).", POINT)
+                                       "its own y axis, or ``convex``: the solid of ``solid``.")
+    position: Vec3 = param((0.0, 1.0, 0.0), "Centre at t = 0 (m); for a convex body, where "
+                                            "its solid's origin is.", POINT)
     velocity: Vec3 = param((0.0, 0.0, 0.0), "Velocity at t = 0 (m/s).", VELOCITY)
     angular_velocity: Vec3 = param((0.0, 0.0, 0.0), "Angular velocity at t = 0 (rad/s).",
                                    VELOCITY)
@@ -77,9 +81,14 @@ class Body(Record):
     half_size: Vec3 = param((0.25, 0.25, 0.25), "Half the extent of a box along its own x, y, "
                                                 "z (m).", SIZES)
     half_length: float = param(0.25, "Half the length of a capsule's segment (m).", SIZE)
-    rotation: Vec3 = param((0.0, 0.0, 0.0), "Orientation of a box or capsule at t = 0: Euler "
-                                            "angles in degrees, R = Rz Ry Rx as for rotate.",
+    rotation: Vec3 = param((0.0, 0.0, 0.0), "Orientation of a box, capsule or convex body at "
+                                            "t = 0: Euler angles in degrees, R = Rz Ry Rx as "
+                                            "for rotate.",
                            Each(Range(-MAX_DEGREES, MAX_DEGREES)))
+    solid: Node | None = param(None, "A convex body's solid: any bounded convex object of "
+                                     "the scene format (a primitive but the torus and the "
+                                     "plane, moved, turned, scaled or intersected), drawn "
+                                     "with its own materials. Its mass is spread evenly.")
     mass: float | None = param(None, "Mass (kg); absent: from density.", MASS)
     density: float | None = param(None, "Density (kg/m^3), mass = density times the "
                                          "volume; absent: [physics] density.", DENSITY)
@@ -92,11 +101,35 @@ class Body(Record):
     def check(self):
         if self.mass is not None and self.density is not None:
             raise SceneError("give mass or density, not both", ("density",))
+        if self.shape != "convex":
+            if self.solid is not None:
+                raise SceneError(f"only a convex body has a solid (this body's shape is "
+                                 f"{self.shape!r})", ("solid",))
+            return
+        if self.solid is None:
+            raise SceneError("a convex body needs a solid (a table with a type, such as "
+                             "{ type = \"cone\", radius = 0.3, height = 0.6 })", ("solid",))
+        problem = convex_problem(self.solid)
+        if problem is not None:
+            raise SceneError(problem, ("solid",))
+
+
+def convex_problem(node: Node) -> str | None:
+    """Why ``node`` cannot be a convex body's solid, or None: it must be convex
+    (`shapes.is_convex`: a union, subtraction, blend, morph, repetition or torus is not) and
+    bounded (a plane is not)."""
+    if not is_convex(node):
+        return (f"a {node.kind} is not convex: a convex body's solid is a primitive other "
+                "than a torus, moved, turned, scaled or intersected with others")
+    if bounding_sphere(node) is None:
+        return f"a {node.kind} is not bounded: a body needs a finite solid"
+    return None
 
 
 def body_node(body: Body, position=None, rotation=None) -> Node:
-    """The object drawn for ``body``: a sphere of its radius, or its box or capsule turned by
-    ``rotation`` (Euler degrees), translated to ``position`` (defaults: the body's own).
+    """The object drawn for ``body``: a sphere of its radius, or its box, capsule or convex
+    solid turned by ``rotation`` (Euler degrees), translated to ``position`` (defaults: the
+    body's own; for a convex body, where its solid's origin goes).
 
     A sphere is drawn unturned (it looks the same), so its shader never changes; a box or
     capsule always has its rotate node, so only numbers change from frame to frame."""
@@ -104,7 +137,9 @@ def body_node(body: Body, position=None, rotation=None) -> Node:
     if body.shape == "sphere":
         return Translate(Sphere(body.radius, material=body.material), centre)
     degrees = body.rotation if rotation is None else tuple(float(a) for a in rotation)
-    if body.shape == "box":
+    if body.shape == "convex":
+        solid = body.solid
+    elif body.shape == "box":
         solid = Box(body.half_size, material=body.material)
     else:
         solid = Capsule((0.0, -body.half_length, 0.0), (0.0, body.half_length, 0.0),
