@@ -37,7 +37,8 @@ convex body first meets a plane of normal -u. The nearest surface point to s + D
 exactly when the surface's normal at s is u, which is the support point; so s is moved to
 the surface point nearest s + D u until it stops (a contraction by rho / (rho + D) on a
 surface of curvature radius rho, so D = `SUPPORT_REACH` radii gains a factor of 17 or more a
-move; exact at once on a face). So a cylinder rolls on its side
+move). On a face nearly square to u a move only slides s along it by D times the angle
+between them, so D doubles while s keeps moving. So a cylinder rolls on its side
 as smoothly as a ball, with no bumps from the spacing of its samples.
 """
 
@@ -53,8 +54,9 @@ from physics.errors import PhysicsError
 GRID_CELLS = 96             # cells along each side of the box the integration covers
 SAMPLE_DIRECTIONS = 160     # Fibonacci directions whose nearest surface points are samples
 PROJECTION_STEPS = 32       # at most this many p - d grad d moves to reach the surface
-SUPPORT_STEPS = 16          # moves of a support point toward its direction, at most
-SUPPORT_REACH = 16          # ... each from a point this many radii out along it
+SUPPORT_STEPS = 40          # moves of a support point toward its direction, at most
+SUPPORT_REACH = 16          # ... the first from a point this many radii out along it,
+MAX_SUPPORT_REACH = 4096    # ... each later one twice as far while it still moves, to this
 # ... until it moves less than this fraction of the radius r: it is then about 1/16 of that
 # from the support point, which leaves the gap along a surface of curvature radius rho wrong
 # by (1e-7 r)^2 / (2 rho), 5e-15 r where rho = r.
@@ -224,16 +226,26 @@ def support_of(distance, normal, direction, size: float) -> np.ndarray:
     """`support` of the convex solid given by its ``distance`` and ``normal`` functions, which
     a sphere of radius ``size`` (m) about the origin holds."""
     direction = np.asarray(direction, np.float64)
-    reach = SUPPORT_REACH * size
-    s = project(distance, normal, reach * direction, size)
+    s = project(distance, normal, SUPPORT_REACH * size * direction, size)
     rows = np.arange(len(s))
+    reach = np.full(len(s), SUPPORT_REACH * size)
+    last = np.zeros(len(s))                 # how far each point moved the time before
     for _ in range(SUPPORT_STEPS):
-        moved = project(distance, normal, s[rows] + reach * direction[rows], size)
-        going = np.sum((moved - s[rows]) ** 2, axis=1) > (SUPPORT_TOLERANCE * size) ** 2
+        moved = project(distance, normal, s[rows] + reach[rows, None] * direction[rows], size)
+        move = np.sqrt(np.sum((moved - s[rows]) ** 2, axis=1))
         s[rows] = moved
-        rows = rows[going]
+        going = move > SUPPORT_TOLERANCE * size
+        rows, move = rows[going], move[going]
         if len(rows) == 0:
             break
+        # Sliding along a face nearly square to the direction, each move covers only reach
+        # times the small angle between them: while the moves do not shrink, reach twice as
+        # far (up to MAX_SUPPORT_REACH); once one falls short (the face's edge is reached),
+        # settle from SUPPORT_REACH again, where the normal's rounding does not show.
+        sliding = move >= 0.5 * last[rows]
+        reach[rows] = np.where(sliding, np.minimum(2 * reach[rows], MAX_SUPPORT_REACH * size),
+                               SUPPORT_REACH * size)
+        last[rows] = move
     return s
 
 
