@@ -405,7 +405,7 @@ def check_world(world, shape_nodes=None) -> None:
     if len(solid):
         from physics.solids import KIND_NAMES
         raise PhysicsError(f"the gpu backend steps spheres only (body {solid[0]} is a "
-                           f"{KIND_NAMES[world.kind[solid[0]]]}): use the cpu backend")
+                           f"{KIND_NAMES[world.kind[solid[0]]]} body): use the cpu backend")
 
 
 def grid_sizes(count: int) -> tuple[int, int]:

@@ -36,7 +36,7 @@ from physics.events import EVENT_DTYPE
 from scene_model.files import write_atomically
 
 FORMAT = "marchlab physics state"     # the tag that says what the file is
-VERSION = 2                           # raised whenever the keys or their meaning change
+VERSION = 3                           # raised whenever the keys or their meaning change
 
 # The fixed description, checked in this order so the first difference named is the most
 # basic one. Scalars: (key, what a message calls it, unit).
@@ -46,8 +46,9 @@ SETTINGS = (("dt", "dt", "s"), ("integrator", "integrator", ""), ("solver", "sol
             ("restitution_threshold", "restitution threshold", "m/s"),
             ("slop", "slop", "m"), ("push_out", "push-out fraction", ""))
 # One value per sphere or per plane: (attribute, what a message calls it, unit).
-BODY_COLUMNS = (("kind", "shape (0 sphere, 1 box, 2 capsule)", ""), ("radius", "radius", "m"),
-                ("extent", "extent", "m"), ("mass", "mass", "kg"),
+BODY_COLUMNS = (("kind", "shape (0 sphere, 1 box, 2 capsule, 3 convex)", ""),
+                ("radius", "radius", "m"), ("extent", "extent", "m"),
+                ("gyration", "moments of inertia per unit mass", "m^2"), ("mass", "mass", "kg"),
                 ("restitution", "restitution", ""), ("friction", "friction", ""))
 PLANE_COLUMNS = (("plane_normal", "normal", ""), ("plane_offset", "offset", "m"),
                  ("plane_restitution", "restitution", ""), ("plane_friction", "friction", ""))

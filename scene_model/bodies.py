@@ -16,7 +16,7 @@ from .errors import SceneError
 from .fields import (MAX_DEGREES, MAX_SPEED, POINT, SIZE, SIZES, Each, Range, Record, Vec3, param,
                      unit_interval)
 from .bounds import bounding_sphere
-from .shapes import Box, Capsule, Node, Rotate, Sphere, Translate, is_convex
+from .shapes import Box, Capsule, Node, Rotate, Sphere, Translate, children, is_convex
 
 # The names of the time-stepping schemes and contact solvers, here once: the scene format
 # accepts them, and physics.INTEGRATORS and physics.SOLVERS are keyed by them.
@@ -117,13 +117,29 @@ class Body(Record):
 def convex_problem(node: Node) -> str | None:
     """Why ``node`` cannot be a convex body's solid, or None: it must be convex
     (`shapes.is_convex`: a union, subtraction, blend, morph, repetition or torus is not) and
-    bounded (a plane is not)."""
+    bounded (a plane is not). The node named is the innermost one at fault."""
     if not is_convex(node):
-        return (f"a {node.kind} is not convex: a convex body's solid is a primitive other "
-                "than a torus, moved, turned, scaled or intersected with others")
+        culprit = _first(node, lambda n: not is_convex(n))
+        return (f"{_a(culprit.kind)} is not convex: a convex body's solid is a primitive "
+                "other than a torus, moved, turned, scaled or intersected with others")
     if bounding_sphere(node) is None:
-        return f"a {node.kind} is not bounded: a body needs a finite solid"
+        culprit = _first(node, lambda n: bounding_sphere(n) is None)
+        return f"{_a(culprit.kind)} is not bounded: a body needs a finite solid"
     return None
+
+
+def _first(node: Node, bad) -> Node:
+    """The innermost node of ``node``'s tree for which ``bad`` holds, ``bad(node)`` being
+    true: the first such child's, depth first, or ``node`` itself."""
+    for child in children(node):
+        if bad(child):
+            return _first(child, bad)
+    return node
+
+
+def _a(kind: str) -> str:
+    """'a union', 'an intersection' (a u sounded 'you' takes 'a')."""
+    return f"{'an' if kind[0] in 'aeio' else 'a'} {kind}"
 
 
 def body_node(body: Body, position=None, rotation=None) -> Node:

@@ -270,5 +270,5 @@ def test_the_gpu_step_refuses_the_stack_in_one_line_before_making_a_gl_context(m
     with pytest.raises(physics.PhysicsError) as caught:
         simulate(build_world(scene, np.float32), 0.1, backend="gpu", scene=scene)
     message = str(caught.value)
-    assert message == ("the gpu backend steps spheres only (body 0 is a box): use the cpu "
+    assert message == ("the gpu backend steps spheres only (body 0 is a box body): use the cpu "
                        "backend")
