@@ -157,7 +157,7 @@ def contact_patch(world, j: int, other_distance, start, within: float, pose=None
 
     Parameters
     ----------
-    world : World
+    world : physics.World
     j : int
         The convex body.
     other_distance : callable
@@ -167,7 +167,8 @@ def contact_patch(world, j: int, other_distance, start, within: float, pose=None
         A point of j's surface to start the search from (its sample nearest the other).
     within : float
         The patch's points are those at most this much (m) farther than the nearest.
-    pose : (positions (N, 3), orientations (N, 4)), optional
+    pose : tuple, optional
+        (positions (N, 3), orientations (N, 4)) where the bodies are; default: the world's.
 
     Returns
     -------
@@ -175,7 +176,7 @@ def contact_patch(world, j: int, other_distance, start, within: float, pose=None
     the nearest point, 1 + k for the direction k; float64, M >= 1.
     """
     nearest, _ = nearest_point(world, j, other_distance, start, pose)
-    gap, normal = other_distance(nearest[None, :])
+    _, normal = other_distance(nearest[None, :])
     tilted = convex_support(world, j, patch_directions(-normal[0]), pose)
     points = np.concatenate([nearest[None, :], tilted])
     gaps, normals = other_distance(points)
