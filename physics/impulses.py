@@ -141,15 +141,51 @@ def collision_impulse(v_rel, normal, gravity_part, restitution, friction, k_norm
 
 def apply_impulse(bodies: SolverBodies, a, b, normal, radius_a, radius_b, impulse) -> None:
     """Add P to body a and -P to b (rows of ``bodies``, in place; sums repeated bodies)."""
-    turn = cross(normal, impulse)
+    apply_rows(bodies, normal, impulse, impulse_rows(bodies, a, b, radius_a, radius_b))
+
+
+@dataclass
+class ImpulseRows:
+    """Where the impulses of K contacts go, a's rows then b's (2K of each), worked out once
+    for a solver's passes over the same contacts.
+
+    flat : (6K,) int, the elements of a (N + 1, 3) array, row by row;
+    linear : (2K, 1) 1/kg, +1/m_a then -1/m_b; angular : (2K, 1), -r_a / I_a then -r_b / I_b.
+    """
+    flat: np.ndarray
+    linear: np.ndarray
+    angular: np.ndarray
+
+
+def impulse_rows(bodies: SolverBodies, a, b, radius_a, radius_b) -> ImpulseRows:
+    """`ImpulseRows` of contacts between bodies a (K,) and b (K,)."""
     im, ii = bodies.inverse_mass, bodies.inverse_inertia
-    # One scattered add for a's rows then b's (the same additions in the same order as two:
-    # a's all first), for velocity and for spin; np.add.at costs per call, not per row.
     rows = np.concatenate([a, b])
-    scatter_add(bodies.velocity, rows, np.concatenate([impulse * im[a][:, None],
-                                                       -impulse * im[b][:, None]]))
-    scatter_add(bodies.spin, rows, np.concatenate([-(radius_a * ii[a])[:, None] * turn,
-                                                   -(radius_b * ii[b])[:, None] * turn]))
+    flat = (rows[:, None] * 3 + np.arange(3)).reshape(-1)
+    return ImpulseRows(flat, np.concatenate([im[a], -im[b]])[:, None],
+                       np.concatenate([-(radius_a * ii[a]), -(radius_b * ii[b])])[:, None])
+
+
+def apply_rows(bodies: SolverBodies, normal, impulse, rows: ImpulseRows) -> None:
+    """`apply_impulse` with its rows worked out (`impulse_rows`).
+
+    One scattered add for a's rows then b's (the same additions in the same order as two:
+    a's all first), for velocity and for spin; np.add.at costs per call, not per row, and
+    adds along one-dimensional indices fastest (`scatter_add`). -P/m_b is P times -1/m_b,
+    the same number: a product's rounding does not depend on the signs.
+    """
+    turn = cross(normal, impulse)
+    both = np.concatenate([impulse, impulse])
+    np.add.at(_flat(bodies.velocity), rows.flat, (both * rows.linear).reshape(-1))
+    np.add.at(_flat(bodies.spin), rows.flat,
+              (np.concatenate([turn, turn]) * rows.angular).reshape(-1))
+
+
+def _flat(array: np.ndarray) -> np.ndarray:
+    """A one-dimensional view of ``array``; an error, never a copy that takes the adds."""
+    view = array.view()
+    view.shape = (-1,)
+    return view
 
 
 def contact_impulse(v_rel, normal, target, friction, k_normal, k_tangent, normal_total,

@@ -52,8 +52,9 @@ from collections import Counter
 import numpy as np
 
 from physics.colliders import MAX_SHAPE_CONTACTS
-from physics.impulses import (SolverBodies, apply_impulse, collision_impulse, contact_impulse,
-                              effective_masses, relative_velocity, scatter_add)
+from physics.impulses import (SolverBodies, apply_impulse, apply_rows, collision_impulse,
+                              contact_impulse, effective_masses, impulse_rows,
+                              relative_velocity, scatter_add)
 from scene_model.geometry import dot
 
 SETTLED = 1e-9   # m/s: resting passes stop once none changes a velocity by more than this
@@ -113,10 +114,12 @@ def solve_sequential(bodies: SolverBodies, contacts, gravity_part, h, threshold,
     normal_total, tangent_total = warm
     _apply_warm_start(bodies, contacts, normal_total, tangent_total)
     target = _resting_target(contacts, h)
+    rows = [_level_rows(bodies, contacts, level) for level in levels]
     for _ in range(iterations):
         counter["resting passes"] += 1
         change = max((_rest(bodies, contacts, level, target, k_normal, k_tangent, normal_total,
-                            tangent_total) for level in levels), default=0)
+                            tangent_total, where) for level, where in zip(levels, rows)),
+                     default=0)
         if change < SETTLED:
             break
     return collisions
@@ -145,10 +148,11 @@ def solve_simultaneous(bodies: SolverBodies, contacts, gravity_part, h, threshol
     normal_total, tangent_total = warm
     _apply_warm_start(bodies, contacts, normal_total, tangent_total)
     target = _resting_target(contacts, h)
+    rows = _level_rows(bodies, contacts, every)
     for _ in range(iterations):
         counter["resting passes"] += 1
         if _rest(bodies, contacts, every, target, k_normal, k_tangent, normal_total,
-                 tangent_total) < SETTLED:
+                 tangent_total, rows) < SETTLED:
             break
     return collisions
 
@@ -300,9 +304,17 @@ def _apply_warm_start(bodies, contacts, normal_total, tangent_total):
                   impulse)
 
 
-def _rest(bodies, contacts, index, target, k_normal, k_tangent, normal_total, tangent_total):
+def _level_rows(bodies, contacts, index):
+    """`impulses.ImpulseRows` of contacts ``index``: the same in every resting pass."""
+    return impulse_rows(bodies, contacts.a[index], contacts.b[index], contacts.radius_a[index],
+                        contacts.radius_b[index])
+
+
+def _rest(bodies, contacts, index, target, k_normal, k_tangent, normal_total, tangent_total,
+          rows):
     """One resting-contact pass over contacts ``index`` (an index array, or a slice: every
-    contact, read without copying): impulses applied, totals updated.
+    contact, read without copying), whose impulses go to ``rows`` (`_level_rows`): impulses
+    applied, totals updated.
 
     Returns the largest change of relative velocity it caused (m/s), 0 for no contacts.
     """
@@ -316,6 +328,6 @@ def _rest(bodies, contacts, index, target, k_normal, k_tangent, normal_total, ta
                               k_normal[index], k_tangent[index], normal_part, tangent_part)
     normal_total[index] = normal_part
     tangent_total[index] = tangent_part
-    apply_impulse(bodies, a, b, n, ra, rb, impulse)
+    apply_rows(bodies, n, impulse, rows)
     size = np.sqrt(dot(impulse, impulse))
     return float(np.max(size * k_tangent[index]))
