@@ -18,11 +18,12 @@ finds its points, the exact test where there is one, samples where there is not:
                      SDF is convex along the segment: a ternary search finds it)  exact
     capsule-capsule  the segments' nearest points, and each end against the
                      other segment (two points for capsules lying side by side)  exact
-    convex-plane     its surface samples (convex.py), and its support point along
-                     the plane's -n                                              exact
-    convex-shape,    its samples in the other's SDF and the other's samples in
-    convex-body      its (both ways), and its point nearest the other
-                     (convex_contacts.py)                                        sampled
+    convex-plane     its contact patch: its support point along the plane's -n,
+                     and those along directions tilted around it that reach as
+                     deep (convex_contacts.py)                                   exact
+    convex-shape,    its patch against the other's SDF (from its nearest point,
+    convex-body      found by an alternating search), and a box's, capsule's
+                     samples in its SDF                                          sampled
     sphere-convex    the centre in the body's SDF: gap = d(x) - r                exact
 
 ("One body's SDF at the other's surface samples", Guendelman, Bridson and Fedkiw,

@@ -30,19 +30,28 @@ from the surface (Box2D v3's b2TimeOfImpact, src/distance.c, stops at the linear
 or take a quarter of it). The gap is the one the contacts use::
 
     against a plane   the 8 corners, the capsule's 2 end spheres           exact
+                      a convex body's surface samples (convex.py)          sampled
     against a shape   its SDF at the 26 surface samples of a box, the
-                      5 along a capsule's segment (solid_contacts.py)      sampled
+                      5 along a capsule's segment, a convex body's
+                      samples (solid_contacts.py)                          sampled
     against a body    sphere-box (the box's SDF), sphere-capsule and
                       capsule-capsule (nearest points of segments),
                       capsule-box (the ternary search, less its error),
                       box-box (the largest of the 15 separating-axis
                       gaps, a lower bound of the distance)                 exact or a lower bound
+                      a convex body: each one's samples in the other's
+                      SDF                                                  sampled
 
 Points that already are contacts of the solver at the start (gap within the body's reach)
 are left to it, so a box sliding on a floor is not stopped by the floor it slides on, unless
 they end the step deeper than they started (less a slop): the solver's restitution bounces
 one contact of a body and leaves its others alone, and can drive a box into the floor it
-rests on. Those are swept to where they would sink that slop.
+rests on. Those are swept to where they would sink that slop. A convex body's contacts are
+its patch (convex_contacts.py), not its samples: a sample that turning brings onto a surface
+(a rolling cylinder's next bottom line), on a body not closing in on it faster than it turns,
+counts as such a contact too, and is looked at `TURN_LOOKS` - 1 times within the step, so that
+a corner turned through a thin wall is met. Swept as impacts, those samples grazed the surface
+every few steps, and each landing in mid-step lifted a rolling cylinder.
 
 **At a plane or shape** (`sweep_statics`) the body is met at its time of impact t*: it is
 moved there, its contacts there are solved with restitution (point_solver.solve_points: the
@@ -86,9 +95,8 @@ from physics.solid_contacts import (segment_nearest_box, speculative_distance, s
                                     support_points)
 from physics.convex_contacts import sampled_gap
 from physics.solids import (BOX, CAPSULE, CONVEX, SPHERE, box_distance, bounding_radius,
-                            capsule_ends,
-                            free_rotation, segment_closest, segments_closest, world_inertia,
-                            world_inverse_inertia)
+                            capsule_ends, free_rotation, segment_closest, segments_closest,
+                            world_inertia, world_inverse_inertia)
 from scene_model.geometry import dot
 
 TARGET_SLOPS = 0.5       # a sweep stops the surfaces this many slops apart ...
@@ -424,7 +432,8 @@ def sweep_solids(world, shapes, sweep: Sweep, reach, h, counter):
 def pair_gaps(world, a, b, position_a, orientation_a, position_b, orientation_b):
     """Lower bounds (K,) of the distance (m) between bodies a (K,) and b (K,) placed at the
     given positions (K, 3) and orientations (K, 4); not both spheres (module docstring).
-    A pair with a convex body has the least gap of either's samples in the other's SDF."""
+    A pair with a convex body has the least gap of either's samples in the other's SDF:
+    sampled, so no lower bound between samples, as a box's against a shape."""
     kind_a, kind_b = world.kind[a], world.kind[b]
     gap = np.zeros(len(a), world.dtype)
     convex = (kind_a == CONVEX) | (kind_b == CONVEX)
