@@ -57,9 +57,8 @@ PROJECTION_STEPS = 32       # at most this many p - d grad d moves to reach the 
 SUPPORT_STEPS = 40          # moves of a support point toward its direction, at most
 SUPPORT_REACH = 16          # ... the first from a point this many radii out along it,
 MAX_SUPPORT_REACH = 4096    # ... each later one twice as far while it still moves, to this
-# ... until it moves less than this fraction of the radius r: it is then about 1/16 of that
-# from the support point, which leaves the gap along a surface of curvature radius rho wrong
-# by (1e-7 r)^2 / (2 rho), 5e-15 r where rho = r.
+# ... until what it could still gain along its direction is below this fraction of the radius
+# r (see `support_of`).
 SUPPORT_TOLERANCE = 1e-6
 SURFACE_TOLERANCE = 1e-10   # |d| below this fraction of the size: on the surface
 SAME_SAMPLE = 1e-6          # samples closer than this fraction of the size are one
@@ -229,12 +228,18 @@ def support_of(distance, normal, direction, size: float) -> np.ndarray:
     s = project(distance, normal, SUPPORT_REACH * size * direction, size)
     rows = np.arange(len(s))
     reach = np.full(len(s), SUPPORT_REACH * size)
-    last = np.zeros(len(s))                 # how far each point moved the time before
+    last = np.full(len(s), np.inf)          # how far each point moved the time before
     for _ in range(SUPPORT_STEPS):
         moved = project(distance, normal, s[rows] + reach[rows, None] * direction[rows], size)
         move = np.sqrt(np.sum((moved - s[rows]) ** 2, axis=1))
         s[rows] = moved
-        going = move > SUPPORT_TOLERANCE * size
+        # A move of m from s + D u slides s along a face at the angle m / D to u, so what is
+        # left to gain along u is at most the face's width, 2 size, times that. Done when
+        # that is below the tolerance twice running (a move cut short by the face's edge
+        # understates the angle to the next face or edge); on a curved surface, when s moves
+        # less than 8e-6 of the size, which leaves the gap (8e-6 size)^2 / rho short.
+        small = 2 * size * move / reach[rows] <= SUPPORT_TOLERANCE * size
+        going = ~(small & (2 * size * last[rows] / reach[rows] <= SUPPORT_TOLERANCE * size))
         rows, move = rows[going], move[going]
         if len(rows) == 0:
             break

@@ -218,9 +218,8 @@ def test_support_value_along_any_direction_is_exact_within_1e_6_of_the_size(case
     (the turned box: its best corner; the cylinder: R sqrt(ux^2 + uz^2) + HH |uy|) within
     1e-6 of the bounding radius, for 2000 seeded random directions and a few just off a
     face's normal, and is never below the best surface sample by more than that. Measured:
-    1.5e-7 m short at worst (box; cylinder 3.9e-8), where moves along a face square to u
-    stop once shorter than 1e-6 of the radius. (With a fixed reach per move, 0.4% of the
-    directions had fallen short by up to 2.1e-4 m.)"""
+    1.3e-9 m short at worst (box; cylinder 3.2e-10). (With a fixed reach per move, 0.4% of
+    the directions had fallen short by up to 2.1e-4 m.)"""
     node, exact = SUPPORT_CASES[case]
     solid = solid_of(node)
     u = np.concatenate([random_directions(2000, seed=3), near_face_normals(case)])
