@@ -155,14 +155,7 @@ def mass_properties(distance, normal, low, high, cells: int = GRID_CELLS):
     """
     volume, centroid, inertia, reach = grid_moments(distance, normal, low, high, cells)
     _, axes = principal_axes(inertia)
-
-    def own_distance(p):
-        return np.asarray(distance(np.asarray(p, np.float64) @ axes.T + centroid), np.float64)
-
-    def own_normal(p):
-        return np.asarray(normal(np.asarray(p, np.float64) @ axes.T + centroid),
-                          np.float64) @ axes
-
+    own_distance, own_normal = in_frame(distance, normal, centroid, axes)
     sides = support_of(own_distance, own_normal, np.concatenate([np.eye(3), -np.eye(3)]),
                        reach)
     box_low = np.array([sides[3 + i, i] for i in range(3)])
@@ -170,6 +163,19 @@ def mass_properties(distance, normal, low, high, cells: int = GRID_CELLS):
     volume, own_centroid, own_inertia, reach = grid_moments(own_distance, own_normal,
                                                             box_low, box_high, cells)
     return volume, centroid + axes @ own_centroid, axes @ own_inertia @ axes.T, reach
+
+
+def in_frame(distance, normal, origin, axes):
+    """The ``distance`` and ``normal`` functions of a solid, taking and giving points and
+    vectors in the frame with its origin at ``origin`` (3,) and its axes the columns of
+    ``axes`` (3, 3): a point p there is origin + axes p where the functions were given."""
+    def own_distance(p):
+        return np.asarray(distance(np.asarray(p, np.float64) @ axes.T + origin), np.float64)
+
+    def own_normal(p):
+        return np.asarray(normal(np.asarray(p, np.float64) @ axes.T + origin),
+                          np.float64) @ axes
+    return own_distance, own_normal
 
 
 def principal_axes(inertia):
@@ -291,14 +297,7 @@ def convex_solid(name: str, distance, normal, low, high,
     except PhysicsError as err:
         raise PhysicsError(f"{name}: {err}") from None
     gyration, axes = principal_axes(inertia)
-
-    def own_distance(p):
-        return np.asarray(distance(np.asarray(p, np.float64) @ axes.T + centroid), np.float64)
-
-    def own_normal(p):
-        return np.asarray(normal(np.asarray(p, np.float64) @ axes.T + centroid),
-                          np.float64) @ axes
-
+    own_distance, own_normal = in_frame(distance, normal, centroid, axes)
     samples = surface_samples(own_distance, own_normal, radius)
     radius = max(radius, float(np.sqrt(np.max(np.sum(samples * samples, axis=1)))))
     return ConvexSolid(name, own_distance, own_normal, samples, volume, gyration, centroid,
