@@ -359,7 +359,7 @@ class World:
     @property
     def inverse_inertia(self) -> np.ndarray:
         """1/I (N,) in 1/(kg m^2), with I = 2/5 m r^2 for a solid sphere (the sphere solver's;
-        for a box or capsule it means nothing: see `inverse_inertia_tensor`)."""
+        for any other body it means nothing: see `inverse_inertia_tensor`)."""
         return 1 / (0.4 * self.mass * self.radius * self.radius)
 
     @property
@@ -507,8 +507,8 @@ class World:
             self._resting_impulses = (keys[order], warm[0][order], warm[1][order])
             solved = contacts
         else:
-            # A box or capsule touches something: every contact is solved at its point
-            # (point_solver.py), the spheres' with them, in one order.
+            # A body that is not a sphere touches something: every contact is solved at its
+            # point (point_solver.py), the spheres' with them, in one order.
             solved, collisions = self._solve_at_points(
                 bodies, sphere_point_contacts(contacts, self, keys), solid_contacts, h, work)
         v_new, spin = bodies.velocity[:n], bodies.spin[:n]
@@ -520,9 +520,9 @@ class World:
         self.orientation = rotate_orientations(self.orientation, turn)
         momentum = np.zeros_like(spin)
         if len(solids):
-            # Free flight keeps the angular momentum L = I_world w, not w: a box or capsule
-            # turns with its L by the splitting of solids.free_rotation, whatever the
-            # integrator, and its new w is L through its inertia where it now points.
+            # Free flight keeps the angular momentum L = I_world w, not w: a body that is not
+            # a sphere turns with its L by the splitting of solids.free_rotation, whatever
+            # the integrator, and its new w is L through its inertia where it now points.
             principal = self.principal_inertia[solids]
             momentum[solids] = np.einsum("nij,nj->ni", world_inertia(q_old[solids], principal),
                                          spin[solids])
@@ -577,7 +577,7 @@ class World:
         it could move a point of it farther than its contact reach:
         L (h max(|u|, |u + h g|) + |r| l) > reach, with L the shapes' largest Lipschitz bound,
         r its turn over the step and l its `lever`. Then every body that moved is swept
-        against the others, where one of the two is a box or capsule.
+        against the others, where one of the two is not a sphere.
         """
         solids = np.flatnonzero(self.active & (self.kind != SPHERE))
         acceleration = np.broadcast_to(self.gravity, x_new.shape)
