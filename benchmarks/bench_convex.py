@@ -33,12 +33,12 @@ import numpy as np
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
 
 import physics  # noqa: E402
+from bench_pybullet import DT, bullet_world  # noqa: E402  (Bullet set up as for the spheres)
 from bench_render import cpu_name  # noqa: E402
 from marchlab.colliders import body_solid  # noqa: E402
 from scene_model.geometry import quaternion_from_matrix, rotation_matrix  # noqa: E402
 from scene_model.shapes import CappedCylinder, Cone, Rotate  # noqa: E402
 
-DT = 1 / 240
 SLOPE = np.radians(30.0)
 NORMAL = np.array([-np.sin(SLOPE), np.cos(SLOPE), 0.0])
 DOWN = -np.array([np.cos(SLOPE), np.sin(SLOPE), 0.0])
@@ -70,14 +70,6 @@ def marchlab_standing():
     world.add_convex(solid.centroid, solid, quaternion_from_matrix(solid.axes), density=1000,
                      restitution=0.0, friction=0.5)
     return world.step, lambda: world.position[0].copy()
-
-
-def bullet_world():
-    import pybullet
-    client = pybullet.connect(pybullet.DIRECT)
-    pybullet.setGravity(0, -9.81, 0, physicsClientId=client)
-    pybullet.setTimeStep(DT, physicsClientId=client)
-    return pybullet, client
 
 
 def bullet_body(pybullet, client, shape, mass, position, orientation):

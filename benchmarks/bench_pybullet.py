@@ -63,12 +63,19 @@ def marchlab_stepper(count: int, solver: str):
     return world.step
 
 
-def bullet_stepper(count: int):
+def bullet_world():
+    """(the pybullet module, a new client): DIRECT mode (no GUI), gravity -9.81 m/s^2 along
+    y, dt = 1/240 s, as every benchmark against Bullet steps it."""
     import pybullet
-    centre, velocity, half = pile(count)
     client = pybullet.connect(pybullet.DIRECT)
     pybullet.setGravity(0, -9.81, 0, physicsClientId=client)
     pybullet.setTimeStep(DT, physicsClientId=client)
+    return pybullet, client
+
+
+def bullet_stepper(count: int):
+    centre, velocity, half = pile(count)
+    pybullet, client = bullet_world()
     # Bullet's planes are z-up; the floor and walls are boxes, the same faces as the planes.
     walls = [((0, -0.5, 0), (half + 1, 0.5, half + 1))]
     for x, z in [(1, 0), (-1, 0), (0, 1), (0, -1)]:

@@ -41,7 +41,7 @@ import numpy as np
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
 
 import physics  # noqa: E402
-from bench_pybullet import seconds_per_step  # noqa: E402  (the same timing, dt = 1/240 s)
+from bench_pybullet import bullet_world, seconds_per_step  # noqa: E402  (dt = 1/240 s)
 from bench_render import cpu_name  # noqa: E402
 import physics.world  # noqa: E402
 from physics.quaternions import quaternion_from_rotation_vector  # noqa: E402
@@ -98,10 +98,7 @@ def marchlab_stepper(centre, turn, velocity=(0.0, 0.0, 0.0)):
 
 
 def bullet_stepper(centre, turn, velocity=(0.0, 0.0, 0.0)):
-    import pybullet
-    client = pybullet.connect(pybullet.DIRECT)
-    pybullet.setGravity(0, -9.81, 0, physicsClientId=client)
-    pybullet.setTimeStep(DT, physicsClientId=client)
+    pybullet, client = bullet_world()
     floor = pybullet.createCollisionShape(pybullet.GEOM_BOX, halfExtents=(50, 0.5, 50),
                                           physicsClientId=client)
     body = pybullet.createMultiBody(0, floor, basePosition=(0, -0.5, 0),

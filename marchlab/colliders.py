@@ -111,17 +111,10 @@ def primitive_coefficients(node: Node, scene: Scene,
 def object_shape(node: Node, name: str, scene: Scene, settings: PhysicsSettings,
                  dtype) -> Shape:
     """One object as a `Shape`: the renderer's SDF and normal, the materials' coefficients."""
-    sdf = build_scene_sdf([node], dtype)
+    distance, normal, step = node_distance(node, dtype)
     with_ids = build_scene_sdf([node], dtype, with_ids=True)
-    step = NORMAL_STEP[np.dtype(dtype)]
     restitution, friction = (np.asarray(values, dtype)
                              for values in primitive_coefficients(node, scene, settings))
-
-    def distance(p):
-        return sdf(np.asarray(p, dtype))[0]
-
-    def normal(p):
-        return estimate_normal(sdf, np.asarray(p, dtype), step)
 
     def surface(p):
         # The id of the primitive whose distance the operators chose, as the renderer colours.
@@ -144,12 +137,25 @@ def body_solid(node: Node) -> ConvexSolid:
     PhysicsError
         A solid without volume.
     """
-    sdf = build_scene_sdf([node], np.float64)
-    step = NORMAL_STEP[np.dtype(np.float64)]
+    distance, normal, _ = node_distance(node, np.float64)
     centre, radius = bounding_sphere(node)
-    return convex_solid(node.kind, lambda p: sdf(np.asarray(p, np.float64))[0],
-                        lambda p: estimate_normal(sdf, np.asarray(p, np.float64), step),
-                        centre - radius, centre + radius)
+    return convex_solid(node.kind, distance, normal, centre - radius, centre + radius)
+
+
+def node_distance(node: Node, dtype):
+    """The renderer's signed distance of ``node`` (points (K, 3) -> (K,)) and its
+    central-difference unit normal (points -> (K, 3)) in ``dtype``, and that normal's step
+    (m, `NORMAL_STEP`)."""
+    sdf = build_scene_sdf([node], dtype)
+    step = NORMAL_STEP[np.dtype(dtype)]
+
+    def distance(p):
+        return sdf(np.asarray(p, dtype))[0]
+
+    def normal(p):
+        return estimate_normal(sdf, np.asarray(p, dtype), step)
+
+    return distance, normal, step
 
 
 def unsafe_distance(node: Node) -> str | None:

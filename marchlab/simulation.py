@@ -160,13 +160,17 @@ def drawn_poses(scene: Scene, centres, orientations):
             solid = body_solid(body.solid)
             turns[index] = turns[index] @ solid.axes.T
             centres[index] -= turns[index] @ solid.centroid
-    return centres, np.array([euler_degrees(turn) for turn in turns]).reshape(-1, 3)
+    return centres, _degrees(turns)
 
 
 def body_rotations(orientations) -> np.ndarray:
     """Euler angles (N, 3) in degrees (R = Rz Ry Rx, as a scene's rotate node) of the
     orientations (N, 4) of a world's bodies, for `scene_model.scene.scene_at`."""
-    matrices = rotation_matrices(np.asarray(orientations, np.float64).reshape(-1, 4))
+    return _degrees(rotation_matrices(np.asarray(orientations, np.float64).reshape(-1, 4)))
+
+
+def _degrees(matrices) -> np.ndarray:
+    """Euler angles (N, 3) in degrees of rotation matrices (N, 3, 3)."""
     return np.array([euler_degrees(matrix) for matrix in matrices]).reshape(-1, 3)
 
 

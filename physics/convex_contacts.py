@@ -31,8 +31,7 @@ from physics.colliders import FALLBACK_NORMAL
 from physics.convex import SAME_SAMPLE, support
 from physics.point_solver import tangent_basis
 from physics.quaternions import rotation_matrices
-from physics.solids import (BOX, CAPSULE, CAPSULE_SAMPLES, CONVEX, box_distance, box_points,
-                            capsule_ends, segment_closest)
+from physics.solids import (BOX, CAPSULE, CONVEX, box_distance, capsule_ends, segment_closest)
 
 NEAREST_STEPS = 6        # moves of the alternating search for a convex body's nearest point
 PATCH_TILT = 0.2         # rad: the patch's directions, tilted this far from the nearest one's
@@ -83,27 +82,6 @@ def placed_distance(world, j: int, x, q, points):
     return distance, gradient @ rotation.T
 
 
-def placed_samples(world, j: int, x, q):
-    """Surface samples of body j centred at x (3,) and turned by q (4,): points (P, 3) and
-    the radius (P,) about each (a box's 26, a capsule's segment points, a convex body's
-    samples, a sphere's centre), in float64."""
-    x = np.asarray(x, np.float64)
-    rotation = rotation_matrices(np.asarray(q, np.float64)[None, :])[0]
-    kind = int(world.kind[j])
-    radius = float(world.radius[j])
-    if kind == BOX:
-        local = box_points(np.asarray(world.extent[j:j + 1], np.float64), "surface")[0]
-    elif kind == CAPSULE:
-        t = np.linspace(-1, 1, CAPSULE_SAMPLES)
-        local = t[:, None] * np.array([0.0, float(world.extent[j, 1]), 0.0])
-        return x + local @ rotation.T, np.full(len(t), radius)
-    elif kind == CONVEX:
-        local = world.solids[world.solid_of[j]].samples
-    else:
-        return x[None, :], np.array([radius])
-    return x + local @ rotation.T, np.zeros(len(local))
-
-
 def convex_support(world, j: int, direction, pose=None) -> np.ndarray:
     """World points (K, 3) of convex body j farthest along world unit directions (K, 3)."""
     position, orientation = (world.position, world.orientation) if pose is None else pose
@@ -111,17 +89,6 @@ def convex_support(world, j: int, direction, pose=None) -> np.ndarray:
     solid = world.solids[world.solid_of[j]]
     local = support(solid, np.asarray(direction, np.float64) @ rotation)
     return np.asarray(position[j], np.float64) + local @ rotation.T
-
-
-def sampled_gap(world, a: int, b: int, x_a, q_a, x_b, q_b) -> float:
-    """The least gap (m) of each body's samples in the other's SDF, bodies a and b placed at
-    x (3,) and turned by q (4,): the distance between them where a sample decides it (exact
-    for a sphere's centre; otherwise at most the samples' spacing too much)."""
-    least = np.inf
-    for mine, x, q, other, y, r in ((a, x_a, q_a, b, x_b, q_b), (b, x_b, q_b, a, x_a, q_a)):
-        point, radius = placed_samples(world, mine, x, q)
-        least = min(least, float(np.min(placed_distance(world, other, y, r, point)[0] - radius)))
-    return least
 
 
 def nearest_point(world, j: int, other_distance, start, pose=None):

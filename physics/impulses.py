@@ -65,9 +65,21 @@ def scatter_add(target: np.ndarray, rows, values: np.ndarray) -> None:
     if not target.flags.c_contiguous:           # no flat view to add into
         np.add.at(target, rows, values)
         return
-    columns = target.shape[1]
-    flat = (np.asarray(rows)[:, None] * columns + np.arange(columns)).reshape(-1)
-    np.add.at(target.reshape(-1), flat, np.asarray(values).reshape(-1))
+    add_at_flat(target, flat_index(rows, target.shape[1]), values)
+
+
+def flat_index(rows, columns: int) -> np.ndarray:
+    """The elements (K C,) of rows ``rows`` (K,) in the flat view of a C-column array, row by
+    row: row * C + column."""
+    return (np.asarray(rows)[:, None] * columns + np.arange(columns)).reshape(-1)
+
+
+def add_at_flat(target: np.ndarray, flat, values) -> None:
+    """target.flat[flat] += values, repeats summed in order (np.add.at into a view of the
+    C-contiguous ``target``: an error, never a copy that takes the adds)."""
+    view = target.view()
+    view.shape = (-1,)
+    np.add.at(view, flat, np.asarray(values).reshape(-1))
 
 
 def relative_velocity(bodies: SolverBodies, a, b, normal, radius_a, radius_b,
@@ -160,9 +172,8 @@ class ImpulseRows:
 def impulse_rows(bodies: SolverBodies, a, b, radius_a, radius_b) -> ImpulseRows:
     """`ImpulseRows` of contacts between bodies a (K,) and b (K,)."""
     im, ii = bodies.inverse_mass, bodies.inverse_inertia
-    rows = np.concatenate([a, b])
-    flat = (rows[:, None] * 3 + np.arange(3)).reshape(-1)
-    return ImpulseRows(flat, np.concatenate([im[a], -im[b]])[:, None],
+    return ImpulseRows(flat_index(np.concatenate([a, b]), 3),
+                       np.concatenate([im[a], -im[b]])[:, None],
                        np.concatenate([-(radius_a * ii[a]), -(radius_b * ii[b])])[:, None])
 
 
@@ -175,17 +186,8 @@ def apply_rows(bodies: SolverBodies, normal, impulse, rows: ImpulseRows) -> None
     the same number: a product's rounding does not depend on the signs.
     """
     turn = cross(normal, impulse)
-    both = np.concatenate([impulse, impulse])
-    np.add.at(_flat(bodies.velocity), rows.flat, (both * rows.linear).reshape(-1))
-    np.add.at(_flat(bodies.spin), rows.flat,
-              (np.concatenate([turn, turn]) * rows.angular).reshape(-1))
-
-
-def _flat(array: np.ndarray) -> np.ndarray:
-    """A one-dimensional view of ``array``; an error, never a copy that takes the adds."""
-    view = array.view()
-    view.shape = (-1,)
-    return view
+    add_at_flat(bodies.velocity, rows.flat, np.concatenate([impulse, impulse]) * rows.linear)
+    add_at_flat(bodies.spin, rows.flat, np.concatenate([turn, turn]) * rows.angular)
 
 
 def contact_impulse(v_rel, normal, target, friction, k_normal, k_tangent, normal_total,

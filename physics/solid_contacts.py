@@ -51,7 +51,7 @@ import numpy as np
 
 from physics.box_contacts import box_box_contacts
 from physics.colliders import FALLBACK_NORMAL, shape_normals, surface_near
-from physics.convex_contacts import body_distance, contact_patch
+from physics.convex_contacts import body_distance, contact_patch, placed_distance
 from physics.quaternions import rotation_matrices
 from physics.solids import (BOX, CAPSULE, CAPSULE_SAMPLES, CONVEX, KIND_NAMES, SPHERE,
                             box_distance, box_points, bounding_radius, capsule_ends,
@@ -283,24 +283,34 @@ def support_points(world, rows, which: str, pose=None):
     radius (K,), feature (K,)). Boxes: their corners (``which = "corners"``) or 26 surface
     points (``"surface"``), radius 0. Capsules: their two ends, or CAPSULE_SAMPLES points along
     the segment, with the capsule's radius. Convex bodies: their surface samples either way,
-    radius 0. ``pose`` = (position (N, 3), orientation (N, 4)) places the bodies elsewhere
-    than the world has them (a swept test's time of impact)."""
-    dtype = world.dtype
+    radius 0. Spheres: their centre, with their radius. ``pose`` = (position (N, 3),
+    orientation (N, 4)) places the bodies elsewhere than the world has them (a swept test's
+    time of impact)."""
     position, orientation = (world.position, world.orientation) if pose is None else pose
+    return placed_points(world, rows, which, position[rows], orientation[rows])
+
+
+def placed_points(world, rows, which: str, position, orientation):
+    """`support_points` of bodies ``rows`` (M,) centred at ``position`` (M, 3) and turned by
+    ``orientation`` (M, 4)."""
+    dtype = world.dtype
+    kind = world.kind[rows]
     body, point, radius, feature = [], [], [], []
-    boxes = rows[world.kind[rows] == BOX]
-    if len(boxes):
+    box = kind == BOX
+    if box.any():
+        boxes = rows[box]
         local = box_points(world.extent[boxes], which).astype(dtype)       # (M, P, 3)
-        rotation = rotation_matrices(orientation[boxes])
-        where = position[boxes][:, None, :] + np.einsum("mij,mpj->mpi", rotation, local)
+        rotation = rotation_matrices(orientation[box])
+        where = position[box][:, None, :] + np.einsum("mij,mpj->mpi", rotation, local)
         count = local.shape[1]
         body.append(np.repeat(boxes, count))
         point.append(where.reshape(-1, 3))
         radius.append(np.zeros(len(boxes) * count, dtype))
         feature.append(np.tile(np.arange(count), len(boxes)))
-    capsules = rows[world.kind[rows] == CAPSULE]
-    if len(capsules):
-        start, end = capsule_ends(position[capsules], orientation[capsules],
+    capsule = kind == CAPSULE
+    if capsule.any():
+        capsules = rows[capsule]
+        start, end = capsule_ends(position[capsule], orientation[capsule],
                                   world.extent[capsules])
         t = np.array([0.0, 1.0]) if which == "corners" else np.linspace(0, 1, CAPSULE_SAMPLES)
         where = start[:, None, :] + t[None, :, None].astype(dtype) * (end - start)[:, None, :]
@@ -308,18 +318,38 @@ def support_points(world, rows, which: str, pose=None):
         point.append(where.reshape(-1, 3))
         radius.append(np.repeat(world.radius[capsules], len(t)))
         feature.append(np.tile(np.arange(len(t)), len(capsules)))
-    for j in rows[world.kind[rows] == CONVEX]:
+    for k in np.flatnonzero(kind == CONVEX):
+        j = rows[k]
         local = world.solids[world.solid_of[j]].samples
-        rotation = rotation_matrices(np.asarray(orientation[j:j + 1], np.float64))[0]
+        rotation = rotation_matrices(np.asarray(orientation[k:k + 1], np.float64))[0]
         body.append(np.full(len(local), j))
-        point.append(np.asarray(position[j], np.float64) + local @ rotation.T)
+        point.append(np.asarray(position[k], np.float64) + local @ rotation.T)
         radius.append(np.zeros(len(local), dtype))
         feature.append(np.arange(len(local)))
+    sphere = kind == SPHERE
+    if sphere.any():
+        body.append(rows[sphere])
+        point.append(position[sphere])
+        radius.append(world.radius[rows[sphere]])
+        feature.append(np.zeros(int(sphere.sum()), np.int64))
     if not body:
         return (np.zeros(0, np.int64), np.zeros((0, 3), dtype), np.zeros(0, dtype),
                 np.zeros(0, np.int64))
     return (np.concatenate(body), np.concatenate(point).astype(dtype),
             np.concatenate(radius).astype(dtype), np.concatenate(feature))
+
+
+def sampled_gap(world, a: int, b: int, x_a, q_a, x_b, q_b) -> float:
+    """The least gap (m) of each body's surface samples (`placed_points`) in the other's SDF,
+    bodies a and b placed at x (3,) and turned by q (4,): the distance between them where a
+    sample decides it (exact for a sphere's centre; otherwise at most the samples' spacing
+    too much)."""
+    least = np.inf
+    for mine, x, q, other, y, r in ((a, x_a, q_a, b, x_b, q_b), (b, x_b, q_b, a, x_a, q_a)):
+        _, point, radius, _ = placed_points(world, np.array([mine]), "surface",
+                                            np.asarray(x)[None, :], np.asarray(q)[None, :])
+        least = min(least, float(np.min(placed_distance(world, other, y, r, point)[0] - radius)))
+    return least
 
 
 def _kind(world, body) -> np.ndarray:
@@ -341,10 +371,10 @@ def _plane_contacts(world, solids, margin, pose=None) -> list:
             point[near] - radius[near, None] * normal, np.tile(normal, (len(rows), 1)),
             gap[near], np.maximum(world.restitution[rows], world.plane_restitution[plane]),
             np.sqrt(world.friction[rows] * world.plane_friction[plane])))
+        def plane_distance(p, normal=normal, offset=offset):
+            return p @ normal - offset, np.tile(np.asarray(normal, np.float64), (len(p), 1))
+
         for j in solids[world.kind[solids] == CONVEX]:
-            def plane_distance(p, normal=normal, offset=offset):
-                return (p @ normal - offset, np.tile(np.asarray(normal, np.float64),
-                                                     (len(p), 1)))
             patch = _patch(world, j, plane_distance, margin[j], pose)
             if patch is not None:
                 point_j, gap_j, _, feature_j = patch

@@ -91,9 +91,8 @@ from physics.broadphase import CROWD_WINDOW, find_pairs
 from physics.colliders import MAX_ADVANCE, MAX_SHAPE_CONTACTS, shape_normals
 from physics.point_solver import PASSES_PER_ITERATION, PointBodies, solve_points
 from physics.quaternions import rotate_orientations, rotation_matrices, rotation_vector_between
-from physics.solid_contacts import (segment_nearest_box, speculative_distance, static_contacts,
-                                    support_points)
-from physics.convex_contacts import sampled_gap
+from physics.solid_contacts import (sampled_gap, segment_nearest_box, speculative_distance,
+                                    static_contacts, support_points)
 from physics.solids import (BOX, CAPSULE, CONVEX, SPHERE, box_distance, bounding_radius,
                             capsule_ends, free_rotation, segment_closest, segments_closest,
                             world_inertia, world_inverse_inertia)
