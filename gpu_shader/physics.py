@@ -44,10 +44,11 @@ How it differs from the CPU step, and why:
   division and sqrt need not be correctly rounded, so results agree with CPU float32 to
   rounding, not bit for bit. Worlds in float64 are refused (``world.copy(dtype="float32")``).
 - the "simultaneous" solver only; "sequential" (Gauss-Seidel) has no data-parallel form.
-- the broad phase is one uniform grid of hashed cells (Teschner et al. 2003), sorted by cell
-  with a counting sort every step, cells as wide as the largest sphere plus the slop: each
-  body looks for the spheres it may touch, or meet on its way, in the cells around it, about
-  O(N). It finds exactly the pairs a loop over every pair finds (``all_pairs=True`` runs that
+- the broad phase is one uniform grid of hashed cells (after Teschner et al. 2003, each row
+  of cells along x in consecutive slots), sorted by cell with a counting sort every step,
+  cells as wide as the largest sphere plus the slop: each body looks for the spheres it may
+  touch, or meet on its way, in the rows of cells around it, about O(N); the two stages that
+  do (begin_step, finish_step) take the bodies in the grid's order, neighbours together. It finds exactly the pairs a loop over every pair finds (``all_pairs=True`` runs that
   loop; tests compare the two), and each body keeps its contacts in the order the CPU sums
   them (by the other's index), so the sums are the CPU's. The CPU keeps one grid per size
   class instead: here a few large spheres among many small ones make the cells, and the
@@ -101,7 +102,8 @@ EVENT_KINDS = np.array(["sphere-plane", "sphere-shape", "sphere-sphere", "left-b
 COUNT_EVENTS = 2 * MAX_ITERATIONS
 COUNT_OVERFLOW = 2 * MAX_ITERATIONS + 1
 COUNT_CANDIDATES = 2 * MAX_ITERATIONS + 3
-COUNTERS = 2 * MAX_ITERATIONS + 4
+COUNT_OUTSIDE_GRID = 2 * MAX_ITERATIONS + 4
+COUNTERS = 2 * MAX_ITERATIONS + 5
 
 # The std430 layouts of the shader's structs, field by field.
 VEC4 = ("<f4", 4)

@@ -12,13 +12,15 @@
 //   STAGE_GRID_SCAN_ADD      each slot: its block's start added to its own (slot_start: one
 //                            read per slot where a walk looks, not two)
 //   STAGE_GRID_SCATTER       each body: (cell, index) written at its slot's start + its rank
+//                            (the bodies not in the grid after all the others)
 //
 // after which the bodies of slot s are grid_entries[slot_start(s) .. slot_start(s + 1) - 1],
 // in no particular order. Cells are cubes of side u_cell_size (twice the largest radius plus
 // the slop: the CPU's 2 max(reach)), hashed into a table of u_table_size slots (a power of two,
-// at least twice the bodies) as Teschner et al. 2003 do ("Optimized spatial hashing for
-// collision detection of deformable objects"); each entry keeps its cell so that a walk skips
-// the other cells that share a slot.
+// at least twice the bodies) after Teschner et al. 2003 ("Optimized spatial hashing for
+// collision detection of deformable objects"), but with each row of cells along x in
+// consecutive slots (grid_slot); each entry keeps its cell so that a walk skips the other
+// cells that share a slot.
 //
 // A walk (grid_walk, next_body) visits every body whose cell lies in the block of cells under
 // a box, each once. A box that covers more cells than there are bodies (a ball flying very
@@ -43,11 +45,15 @@ vec3 cell_coordinates(vec3 x) {
 
 ivec3 grid_cell(vec3 x) { return ivec3(cell_coordinates(x)); }
 
-// The slot of a cell in the hash table: its coordinates times three large primes, xor-ed
-// (Teschner et al. 2003, as broadphase._hash), modulo the table's size.
+// The slot of a cell in the hash table: x plus a hash of (y, z), modulo the table's size.
+// The hash is Teschner et al.'s (2003, as broadphase._hash: coordinates times large primes,
+// xor-ed) on y and z only, so a row of cells along x fills consecutive slots. Sorted by slot,
+// the bodies of one row come one after another (STAGE_BEGIN and STAGE_FINISH take them in
+// that order, `walk_order`), and the walks of neighbouring bodies, over the same rows of
+// cells, read neighbouring slots.
 uint grid_slot(ivec3 cell) {
-    uvec3 mixed = uvec3(cell) * uvec3(73856093u, 19349663u, 83492791u);
-    return (mixed.x ^ mixed.y ^ mixed.z) & uint(u_table_size - 1);
+    uint row = (uint(cell.y) * 19349663u) ^ (uint(cell.z) * 83492791u);
+    return (uint(cell.x) + row) & uint(u_table_size - 1);
 }
 
 bool finite3(vec3 x) { return !any(isinf(x)) && !any(isnan(x)); }
@@ -56,15 +62,18 @@ bool finite3(vec3 x) { return !any(isinf(x)) && !any(isnan(x)); }
 // once STAGE_GRID_SCAN_ADD has run.
 int slot_start(uint slot) { return int(cell_start[slot]); }
 
-// STAGE_GRID_COUNT: body i's place in its cell's slot, kept in grid_rank; -1 (not in the
-// grid) for a body out of the world or at a position that is not finite, which no exact test
-// can pair. (And the count of the bodies that this step's walks meet starts from 0.)
+// STAGE_GRID_COUNT: body i's place in its cell's slot, kept in grid_rank; for a body out of
+// the world or at a position that is not finite, which no exact test can pair, -1 - its place
+// among such bodies (they go last in grid_entries, after every slot's). (And the count of the
+// bodies that this step's walks meet starts from 0.)
 void grid_count(int i) {
     if (i == 0) counters[COUNT_CANDIDATES] = 0u;
     vec3 x = bodies[i].position.xyz;
-    int rank = -1;
+    int rank;
     if (bodies[i].in_world != 0 && finite3(x)) {
         rank = int(atomicAdd(cell_count[grid_slot(grid_cell(x))], 1u));
+    } else {
+        rank = -1 - int(atomicAdd(counters[COUNT_OUTSIDE_GRID], 1u));
     }
     bodies[i].grid_rank = rank;
 }
@@ -86,6 +95,7 @@ void scan_block(int block) {
 // blocks before b, and block_start[blocks] the number in the grid. (Serial: u_table_size /
 // u_scan_block additions, a few hundred for ten thousand bodies.)
 void scan_block_totals() {
+    counters[COUNT_OUTSIDE_GRID] = 0u;       // grid_count has placed them: empty for next step
     uint running = 0u;
     for (int b = 0; b < u_table_size / u_scan_block; b++) {
         uint total = block_start[b];
@@ -103,20 +113,35 @@ void scan_add(uint slot) {
     else cell_start[slot] += block_start[block_of];
 }
 
-// STAGE_GRID_SCATTER: body i and its cell, at its place among the bodies sorted by slot.
+// STAGE_GRID_SCATTER: body i and its cell, at its place among the bodies sorted by slot; a
+// body not in the grid at its place from the end (no walk reads there: the last slot ends
+// where they begin), so that grid_entries[k].w, k = 0 .. N - 1, names every body once.
 void grid_scatter(int i) {
     int rank = bodies[i].grid_rank;
-    if (rank < 0) return;
+    if (rank < 0) {
+        grid_entries[u_count + rank] = ivec4(0, 0, 0, i);
+        return;
+    }
     ivec3 cell = grid_cell(bodies[i].position.xyz);
     grid_entries[slot_start(grid_slot(cell)) + rank] = ivec4(cell, i);
 }
 
-// A walk over the bodies in the cells under a box (grid_walk), one body per next_body.
+// The body that invocation k of STAGE_BEGIN and STAGE_FINISH takes: the bodies in the order
+// of their slots, so that the 8 invocations llvmpipe runs in step (and a GPU's warp) walk
+// neighbouring cells, read the same entries, and meet about as many bodies each. Which body an
+// invocation takes changes no result: each writes only its own body's rows.
+int walk_order(int k) { return grid_entries[k].w; }
+
+// A walk over the bodies in the cells under a box (grid_walk), one body per next_body. It goes
+// row by row (a row: the box's cells along x at one y and z), and a row's cells fill
+// consecutive slots (grid_slot), so their bodies are one run of entries: at most two, where
+// the slots wrap around the end of the table.
 struct GridWalk {
     bool every_body;        // the textbook loop over bodies 0 .. N - 1 instead of the grid
-    ivec3 first, last;      // the block of cells to visit, x fastest
-    ivec3 cell;             // the cell being visited
-    int next, end;          // the entries of its slot still to look at
+    ivec3 first, last;      // the block of cells to visit
+    ivec2 row;              // the row being visited: its y and z
+    int next, end;          // the entries of its run still to look at
+    int wrapped_end;        // the end of the run's second part (from entry 0), or -1
     int met;                // bodies met so far
 };
 
@@ -125,13 +150,16 @@ GridWalk grid_walk(vec3 low, vec3 high) {
     GridWalk walk;
     vec3 first = cell_coordinates(low), last = cell_coordinates(high);
     vec3 size = last - first + 1.0;
+    // (a row longer than the table, whose run would wrap twice, is walked this way too: it
+    // has more cells than there are bodies)
     walk.every_body = u_all_pairs != 0 || !finite3(low) || !finite3(high)
         || size.x * size.y * size.z > float(u_count);
     walk.first = ivec3(first);
     walk.last = ivec3(last);
-    walk.cell = walk.first - ivec3(1, 0, 0);            // next_body moves on to `first`
+    walk.row = walk.first.yz - ivec2(1, 0);             // next_body moves on to the first row
     walk.next = 0;
     walk.end = walk.every_body ? u_count : 0;
+    walk.wrapped_end = -1;
     walk.met = 0;
     return walk;
 }
@@ -143,21 +171,39 @@ bool next_body(inout GridWalk walk, out int j) {
     while (true) {
         while (walk.next < walk.end) {
             int k = walk.next++;
-            if (walk.every_body) j = k;
-            else if (grid_entries[k].xyz == walk.cell) j = grid_entries[k].w;
-            else continue;                          // another cell that shares the slot
+            if (walk.every_body) {
+                j = k;
+            } else {
+                ivec4 entry = grid_entries[k];
+                // another cell that shares one of the run's slots is skipped
+                if (entry.yz != walk.row || entry.x < walk.first.x || entry.x > walk.last.x) {
+                    continue;
+                }
+                j = entry.w;
+            }
             walk.met++;
             return true;
         }
-        walk.cell.x++;
-        if (walk.cell.x > walk.last.x) { walk.cell.x = walk.first.x; walk.cell.y++; }
-        if (walk.cell.y > walk.last.y) { walk.cell.y = walk.first.y; walk.cell.z++; }
-        if (walk.every_body || walk.cell.z > walk.last.z) {
+        if (walk.wrapped_end >= 0) {                   // the run's part from slot 0
+            walk.next = 0;
+            walk.end = walk.wrapped_end;
+            walk.wrapped_end = -1;
+            continue;
+        }
+        walk.row.x++;
+        if (walk.row.x > walk.last.y) { walk.row.x = walk.first.y; walk.row.y++; }
+        if (walk.every_body || walk.row.y > walk.last.z) {
             atomicAdd(counters[COUNT_CANDIDATES], uint(walk.met));
             return false;
         }
-        uint slot = grid_slot(walk.cell);
+        uint slot = grid_slot(ivec3(walk.first.x, walk.row));
+        uint end = slot + uint(walk.last.x - walk.first.x + 1);
         walk.next = slot_start(slot);
-        walk.end = slot_start(slot + 1u);
+        if (end <= uint(u_table_size)) {
+            walk.end = slot_start(end);
+        } else {
+            walk.end = slot_start(uint(u_table_size));
+            walk.wrapped_end = slot_start(end - uint(u_table_size));
+        }
     }
 }

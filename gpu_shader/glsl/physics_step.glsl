@@ -79,6 +79,7 @@ layout(local_size_x = 64) in;
 #define COUNT_OVERFLOW (2 * MAX_ITERATIONS + 1)
 #define COUNT_TRAVEL (2 * MAX_ITERATIONS + 2)
 #define COUNT_CANDIDATES (2 * MAX_ITERATIONS + 3)
+#define COUNT_OUTSIDE_GRID (2 * MAX_ITERATIONS + 4)
 
 struct Body {
     vec4 position;          // x_n (m), the state the step starts from and ends in
@@ -1070,6 +1071,8 @@ void main() {
     if (STAGE == STAGE_COLLIDE_COUNT || STAGE == STAGE_COLLIDE_APPLY
             || STAGE == STAGE_WARM_START || STAGE == STAGE_REST) {
         i = order[i];                                      // the solver's order (Order)
+    } else if (STAGE == STAGE_BEGIN || STAGE == STAGE_FINISH) {
+        i = walk_order(i);                                 // by grid slot (physics_grid.glsl)
     }
     if (STAGE == STAGE_ORDER_SCATTER) order_scatter(i);
     else if (STAGE == STAGE_GRID_COUNT) grid_count(i);

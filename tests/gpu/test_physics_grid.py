@@ -191,3 +191,38 @@ def test_a_crowd_spawned_at_one_point_is_refused_in_one_line():
     with pytest.raises(PhysicsError, match="more than 24 contacts") as error:
         stepper(world)(1)
     assert "\n" not in str(error.value)
+
+
+def grid_slot(cell, table_size: int) -> int:
+    """The slot of ``cell`` (3 ints) in the GPU grid's hash table, as glsl/physics_grid.glsl's
+    grid_slot computes it in uint32: x plus a hash of y and z."""
+    x, y, z = (int(c) & 0xFFFFFFFF for c in cell)
+    row = ((y * 19349663) & 0xFFFFFFFF) ^ ((z * 83492791) & 0xFFFFFFFF)
+    return (x + row) & (table_size - 1)
+
+
+def test_a_row_of_cells_whose_slots_wrap_past_the_table_end_still_meets_its_neighbour():
+    # A row of cells fills consecutive slots, so a walk reads one run of entries per row; where
+    # the run passes the table's last slot it goes on from slot 0. Two touching spheres in
+    # neighbouring cells of the row y = z = 0, one in the table's last slot and the other in
+    # slot 0: each is met only through that second part of the run.
+    from gpu_shader.physics import cell_size, grid_sizes
+    radius = 0.05
+    far = [(0.0, 1.0 + 0.2 * k, 0.0) for k in range(38)]       # a column, none touching
+    world = world_of(np.array(far + [(0.0, 0.0, 0.0)] * 2), np.full(40, radius))
+    table, _ = grid_sizes(world.count)
+    cell = np.float32(cell_size(world))
+    x_a = float(table * cell) - 0.02                  # in cell table - 1: the last slot
+    world.position[38] = (x_a, float(cell) / 2, float(cell) / 2)
+    world.position[39] = (x_a + 2 * radius, float(cell) / 2, float(cell) / 2)   # touching
+    cells = np.floor(world.position[38:].astype(np.float32) / cell).astype(int)
+    assert [grid_slot(c, table) for c in cells] == [table - 1, 0]
+    assert world.count >= 27        # so that the walks use the grid, not every body
+    lists = {}
+    for all_pairs in (False, True):
+        gpu = stepper(world.copy(), all_pairs)
+        gpu(1)
+        lists[all_pairs] = gpu.contact_lists()
+    assert list(lists[False][38]) == [39] and list(lists[False][39]) == [38]
+    for grid, every in zip(lists[False], lists[True]):
+        np.testing.assert_array_equal(grid, every)
