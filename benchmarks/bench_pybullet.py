@@ -1,16 +1,19 @@
 """The CPU step against Bullet 3 (pybullet) on the same pile of spheres, side by side.
 
     pip install pybullet          # a benchmark's dependency only, not the toolkit's
-    python benchmarks/bench_pybullet.py [--counts 100 1000 10000] [--seconds 0.25]
+    python benchmarks/bench_pybullet.py [--counts 100 1000 10000] [--seconds 0.25] [--repeat 5]
 
 Both engines get the same world: spheres of radius 5 cm on a jittered lattice in a box (a
 floor and four walls, as planes), with the same random velocities, restitution 0.5, friction
 0.4, gravity -9.81 m/s^2 and dt = 1/240 s. marchlab steps it with `physics.World.step`
 (float64, each solver), Bullet with `stepSimulation` (its default sequential impulse solver,
-10 iterations, one substep; DIRECT mode, no GUI). After 0.25 s of warm-up (simulated), each
-is timed over ``--seconds`` of simulated time; the table gives microseconds per sphere-step
-and marchlab's time over Bullet's, measured one after the other in one run. Machines are
-shared and noisy: compare the ratios of one run, not absolute times across runs.
+10 iterations, one substep; DIRECT mode, no GUI). The engines take turns, ``--repeat``
+rounds: in each, every engine builds the world afresh, steps 0.25 s of warm-up (simulated)
+and is timed over the next ``--seconds``, in this process's CPU time (`time.process_time`:
+both run in this one thread, and time spent waiting for a core of a busy machine is not
+counted). The table gives each engine's fastest and median run in microseconds per
+sphere-step and marchlab's over Bullet's, fastest to fastest and median to median. Machines
+are shared and noisy: compare the ratios of one run, not absolute times across runs.
 
 Bullet is C++ with one call per step; marchlab is NumPy with a Python loop over the stages of
 a step and, in the sequential solver, over dependency levels. The engines also differ in what
@@ -21,8 +24,10 @@ threshold and sleeping), so the comparison is of speed on the same scene, not of
 from __future__ import annotations
 
 import argparse
+import functools
 import os
 import platform
+import statistics
 import sys
 import time
 
@@ -114,27 +119,51 @@ def seconds_per_step(step, seconds: float, warm_up: float = WARM_UP) -> float:
     return (time.perf_counter() - start) / steps
 
 
+def alternating_runs(makers, seconds: float, repeat: int, warm_up: float = WARM_UP):
+    """CPU seconds per step of each of ``makers`` (each returns a new ``step(n)``), run by
+    run: ``repeat`` rounds in which each in turn builds its world, steps ``warm_up`` simulated
+    seconds and is timed over the next ``seconds``. Every run times the same stretch of the
+    same simulation (a pile is busiest just after the warm-up and grows calmer), so the
+    fastest and the median of the runs compare like with like. Returns one list of
+    ``repeat`` figures per maker."""
+    steps = max(1, round(seconds / DT))
+    runs = [[] for _ in makers]
+    for _ in range(repeat):
+        for make, figures in zip(makers, runs):
+            step = make()
+            step(round(warm_up / DT))
+            start = time.process_time()
+            step(steps)
+            figures.append((time.process_time() - start) / steps)
+    return runs
+
+
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--counts", type=int, nargs="+", default=[100, 1000, 10000])
     parser.add_argument("--seconds", type=float, default=0.25)
+    parser.add_argument("--repeat", type=int, default=5)
     args = parser.parse_args(argv)
     try:
         import pybullet  # noqa: F401
     except ImportError:
         sys.exit("bench_pybullet: pybullet is not installed (pip install pybullet)")
     print(f"# {cpu_name()}, Python {platform.python_version()}, NumPy {np.__version__}; "
-          f"{args.seconds} s simulated after {WARM_UP} s of warm-up, dt = 1/240 s")
-    print("| spheres | engine | µs per sphere-step | against Bullet |")
+          f"{args.seconds} s simulated after {WARM_UP} s of warm-up, {args.repeat} alternating "
+          f"runs, dt = 1/240 s, CPU time")
+    print("| spheres | engine | µs per sphere-step: fastest, median | against Bullet: "
+          "fastest, median |")
     print("|---:|---|---:|---:|")
     for count in args.counts:
-        bullet = seconds_per_step(bullet_stepper(count), args.seconds)
-        print(f"| {count:,} | Bullet 3 (pybullet) | {bullet / count * 1e6:.1f} | 1.00x |",
-              flush=True)
-        for solver in ("simultaneous", "sequential"):
-            ours = seconds_per_step(marchlab_stepper(count, solver), args.seconds)
-            print(f"| {count:,} | marchlab, {solver} | {ours / count * 1e6:.1f} | "
-                  f"{ours / bullet:.2f}x |", flush=True)
+        engines = [("Bullet 3 (pybullet)", functools.partial(bullet_stepper, count))]
+        engines += [(f"marchlab, {solver}", functools.partial(marchlab_stepper, count, solver))
+                    for solver in ("simultaneous", "sequential")]
+        runs = alternating_runs([make for _, make in engines], args.seconds, args.repeat)
+        figures = [(min(r), statistics.median(r)) for r in runs]
+        for (name, _), (fastest, median) in zip(engines, figures):
+            print(f"| {count:,} | {name} | {fastest / count * 1e6:.1f}, "
+                  f"{median / count * 1e6:.1f} | {fastest / figures[0][0]:.2f}x, "
+                  f"{median / figures[0][1]:.2f}x |", flush=True)
 
 
 if __name__ == "__main__":

@@ -73,7 +73,8 @@ class Contacts:
 
     def select(self, keep: np.ndarray) -> "Contacts":
         """The contacts where ``keep`` (K,) is True, in the same order."""
-        return Contacts(**{name: value[keep] for name, value in vars(self).items()})
+        index = np.flatnonzero(keep)        # taken once, for all thirteen fields (`take`)
+        return Contacts(**{name: value.take(index, axis=0) for name, value in vars(self).items()})
 
     @property
     def static(self) -> np.ndarray:

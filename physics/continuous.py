@@ -193,6 +193,8 @@ def _shape_times(world, shapes, position, velocity, acceleration, remaining, lan
     skin = SKIN_SLOPS * world.slop
     times = np.full((n, len(shapes)), np.inf, dtype)
     normals = np.zeros((n, len(shapes), 3), dtype)
+    if not shapes:                      # nothing to meet (nor faces of one to land on)
+        return times, normals
     end_velocity = velocity + remaining[:, None] * acceleration
     travel = remaining * np.maximum(np.sqrt(dot(velocity, velocity)),
                                     np.sqrt(dot(end_velocity, end_velocity)))

@@ -49,8 +49,21 @@ _NEXT, _AFTER = np.array([1, 2, 0]), np.array([2, 0, 1])    # y z x and z x y
 def cross(p: np.ndarray, q: np.ndarray) -> np.ndarray:
     """Row-wise cross product p x q of (K, 3) arrays, written out (np.cross is slower here)."""
     # All three components at once, p_y q_z - p_z q_y and its rotations: the same products
-    # and differences as component by component, in a third of the NumPy calls.
-    return p[:, _NEXT] * q[:, _AFTER] - p[:, _AFTER] * q[:, _NEXT]
+    # and differences as component by component, in a third of the NumPy calls (the columns
+    # taken by `take`, as `take_rows` takes rows).
+    return (p.take(_NEXT, axis=1) * q.take(_AFTER, axis=1)
+            - p.take(_AFTER, axis=1) * q.take(_NEXT, axis=1))
+
+
+def take_rows(array: np.ndarray, index) -> np.ndarray:
+    """array[index]: the rows ``index`` (K,) of an (N, C) array, or a view where ``index`` is a
+    slice.
+
+    The same rows as fancy indexing, by ``ndarray.take``, which skips most of its work on the
+    arguments: 1.4 against 4.5 microseconds for 100 rows of 3, and a step of 100 spheres
+    gathers rows some 80 times.
+    """
+    return array[index] if isinstance(index, slice) else array.take(index, axis=0)
 
 
 def scatter_add(target: np.ndarray, rows, values: np.ndarray) -> None:
@@ -86,8 +99,9 @@ def relative_velocity(bodies: SolverBodies, a, b, normal, radius_a, radius_b,
                       surface=None) -> np.ndarray:
     """v_rel (K, 3) of a's contact point relative to b's (m/s); ``surface`` (K, 3), the
     velocity of a moving static surface b (a kinematic object), is b's where given."""
-    lever = radius_a[:, None] * bodies.spin[a] + radius_b[:, None] * bodies.spin[b]
-    v_rel = bodies.velocity[a] - bodies.velocity[b] - cross(lever, normal)
+    spin, velocity = bodies.spin, bodies.velocity
+    lever = radius_a[:, None] * take_rows(spin, a) + radius_b[:, None] * take_rows(spin, b)
+    v_rel = take_rows(velocity, a) - take_rows(velocity, b) - cross(lever, normal)
     return v_rel if surface is None else v_rel - surface
 
 

@@ -54,7 +54,7 @@ import numpy as np
 from physics.colliders import MAX_SHAPE_CONTACTS
 from physics.impulses import (SolverBodies, apply_impulse, apply_rows, collision_impulse,
                               contact_impulse, effective_masses, impulse_rows,
-                              relative_velocity, scatter_add)
+                              relative_velocity, scatter_add, take_rows)
 from scene_model.geometry import dot
 
 SETTLED = 1e-9   # m/s: resting passes stop once none changes a velocity by more than this
@@ -281,17 +281,19 @@ def _collide(bodies, contacts, index, gravity_part, k_normal, k_tangent, thresho
              v_rel=None):
     """Collision impulses for contacts ``index``, applied; None if none of them collides.
     ``v_rel`` is their relative velocity where the caller has it already (the same values)."""
-    a, b, n = contacts.a[index], contacts.b[index], contacts.normal[index]
+    a, b, n = contacts.a[index], contacts.b[index], take_rows(contacts.normal, index)
     ra, rb = contacts.radius_a[index], contacts.radius_b[index]
     if v_rel is None:
-        v_rel = relative_velocity(bodies, a, b, n, ra, rb, contacts.surface_velocity[index])
+        v_rel = relative_velocity(bodies, a, b, n, ra, rb,
+                                  take_rows(contacts.surface_velocity, index))
     impulse, j, approach = collision_impulse(
         v_rel, n, gravity_part[index], contacts.restitution[index], contacts.friction[index],
         k_normal[index], k_tangent[index], threshold)
-    hit = j > 0
-    if not hit.any():
+    hit = np.flatnonzero(j > 0)
+    if not len(hit):
         return None
-    apply_impulse(bodies, a[hit], b[hit], n[hit], ra[hit], rb[hit], impulse[hit])
+    apply_impulse(bodies, a[hit], b[hit], take_rows(n, hit), ra[hit], rb[hit],
+                  take_rows(impulse, hit))
     return index[hit], approach[hit], j[hit]
 
 
@@ -318,12 +320,12 @@ def _rest(bodies, contacts, index, target, k_normal, k_tangent, normal_total, ta
 
     Returns the largest change of relative velocity it caused (m/s), 0 for no contacts.
     """
-    a, b, n = contacts.a[index], contacts.b[index], contacts.normal[index]
+    a, b, n = contacts.a[index], contacts.b[index], take_rows(contacts.normal, index)
     if len(a) == 0:
         return 0.0
     ra, rb = contacts.radius_a[index], contacts.radius_b[index]
-    v_rel = relative_velocity(bodies, a, b, n, ra, rb, contacts.surface_velocity[index])
-    normal_part, tangent_part = normal_total[index], tangent_total[index]
+    v_rel = relative_velocity(bodies, a, b, n, ra, rb, take_rows(contacts.surface_velocity, index))
+    normal_part, tangent_part = normal_total[index], take_rows(tangent_total, index)
     impulse = contact_impulse(v_rel, n, target[index], contacts.friction[index],
                               k_normal[index], k_tangent[index], normal_part, tangent_part)
     normal_total[index] = normal_part
