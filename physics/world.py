@@ -658,7 +658,8 @@ class World:
         at_points = isinstance(contacts, PointContacts)
         kinds = contacts.kind if at_points else contacts.kind()
         others = contacts.other if at_points else contacts.other()
-        for index, approach, impulse in collisions:
+        if collisions:      # every sweep's, in order, as one block of events
+            index, approach, impulse = (np.concatenate(part) for part in zip(*collisions))
             self._add_events(kinds[index], contacts.a[index], others[index], approach, impulse)
         planes = len(self.plane_offset)
         for body, static, approach, impulse in hits:
