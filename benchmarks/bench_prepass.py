@@ -115,8 +115,10 @@ def main() -> None:
     for name in names:
         print(steps_row(name, rendered_scene(load_scene(name)), width, height))
     width, height = args.size
-    backends = [b for b in args.backends.split(",")
-                if backend_problem(b.split()[0]) is None]
+    backends = [b for b in args.backends.split(",")          # --backends "": counts only
+                if b and backend_problem(b.split()[0]) is None]
+    if not backends:
+        return
     print(f"\nTime per frame at {width}x{height}, ms (median of {args.repeat}; plain / cone "
           "= ratio):\n")
     print("| scene | " + " | ".join(backends) + " |")
