@@ -23,9 +23,11 @@ world (the lattice in float32, simultaneous solver) for ``--gpu-counts`` (defaul
 and 10,000 spheres): steps/s of each after the same warm-up, the GPU's timed with a read-back
 of the state at the end, as `physics.simulate` would do at a record. "candidates" is how many
 bodies the GPU's grid walks met per sphere in the last step (contacts and sweep test
-together; every pair would be 2 N). ``--counts`` with no value skips the float64 table:
+together; every pair would be 2 N). ``--gpu-repeat`` runs each that many times, CPU and GPU
+in turn, and gives the fastest and the median. ``--counts`` with no value skips the float64
+table:
 
-    python benchmarks/bench_physics.py --counts --gpu
+    python benchmarks/bench_physics.py --counts --gpu --gpu-repeat 3
 """
 
 from __future__ import annotations
@@ -33,6 +35,7 @@ from __future__ import annotations
 import argparse
 import os
 import platform
+import statistics
 import sys
 import time
 
@@ -117,6 +120,9 @@ def main(argv=None) -> int:
     parser.add_argument("--gpu", action="store_true",
                         help="also time the GPU step (gpu_shader.physics) for --gpu-counts")
     parser.add_argument("--gpu-counts", type=int, nargs="+", default=[100, 1000, 10000])
+    parser.add_argument("--gpu-repeat", type=int, default=1,
+                        help="alternating CPU and GPU runs per count, each on a new world "
+                             "(default 1)")
     args = parser.parse_args(argv)
     print(f"`python benchmarks/bench_physics.py {' '.join(sys.argv[1:])}`".replace(" `", "`"))
     print(f"\nSpheres in a box, dt = 1/240 s, float64; {cpu_name()}, "
@@ -140,7 +146,7 @@ def main(argv=None) -> int:
     if args.worst:
         time_worst(args.worst_counts, args.worst_steps, args.solver or list(physics.SOLVERS))
     if args.gpu:
-        time_gpu(args.gpu_counts, args.seconds)
+        time_gpu(args.gpu_counts, args.seconds, args.gpu_repeat)
     return 0
 
 
@@ -162,29 +168,39 @@ def time_worst(counts, steps: int, solvers) -> None:
                       f"{contacts:,} | {extent:.3f} |", flush=True)
 
 
-def time_gpu(counts, seconds: float) -> None:
+def time_gpu(counts, seconds: float, repeat: int = 1) -> None:
     """Rows for the GPU step beside the CPU step: the same boxes in float32, simultaneous
-    solver, the same warm-up; the GPU's steps/s include the final read-back."""
+    solver, the same warm-up; the GPU's steps/s include the final read-back. With ``repeat``
+    > 1 the two take turns, each run on a world built afresh and timed over the same stretch
+    after the warm-up, and the table gives the fastest run of each (the median in brackets)."""
     from gpu_shader.context import gl_context, renderer_name
     from gpu_shader.physics import GpuStepper
     print(f"\nGPU step on {renderer_name(gl_context())} beside the CPU step, both float32, "
-          "simultaneous solver, the same world:\n")
+          f"simultaneous solver, the same world; fastest of {repeat} alternating runs "
+          "(median):\n")
     print("| spheres | contacts (last step) | CPU steps/s | GPU steps/s | GPU / CPU | "
           "GPU ms/step | GPU candidates per sphere |")
     print("| ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+    warm_up = lambda world: int(round(0.25 / world.dt))       # noqa: E731
     for count in counts:
-        world = box_of_spheres(count, "simultaneous").copy(dtype="float32")
-        steps, wall = time_steps(world, seconds)
-        cpu = steps / wall
-        contacts = len(physics.contacts.find_contacts(world, world.slop))
-        world = box_of_spheres(count, "simultaneous").copy(dtype="float32")
-        stepper = GpuStepper(world)
-        stepper(int(round(0.25 / world.dt)))               # the same warm-up as the CPU
-        start = time.perf_counter()
-        stepper(steps)
-        wall = time.perf_counter() - start
-        print(f"| {count:,} | {contacts:,} | {cpu:.1f} | {steps / wall:.1f} | "
-              f"{steps / wall / cpu:.2f} | {1e3 * wall / steps:.2f} | "
+        cpu_walls, gpu_walls = [], []
+        for _ in range(repeat):
+            world = box_of_spheres(count, "simultaneous").copy(dtype="float32")
+            steps, wall = time_steps(world, seconds)
+            cpu_walls.append(wall)
+            contacts = len(physics.contacts.find_contacts(world, world.slop))
+            world = box_of_spheres(count, "simultaneous").copy(dtype="float32")
+            stepper = GpuStepper(world)
+            stepper(warm_up(world))                           # the same warm-up as the CPU
+            start = time.perf_counter()
+            stepper(steps)
+            gpu_walls.append(time.perf_counter() - start)
+        cpu, gpu = steps / min(cpu_walls), steps / min(gpu_walls)
+        cpu_median, gpu_median = (steps / statistics.median(w) for w in (cpu_walls, gpu_walls))
+        brackets = (lambda value: f" ({value:.1f})" if repeat > 1 else "")  # noqa: E731
+        ratio = f"{gpu / cpu:.2f}" + (f" ({gpu_median / cpu_median:.2f})" if repeat > 1 else "")
+        print(f"| {count:,} | {contacts:,} | {cpu:.1f}{brackets(cpu_median)} | "
+              f"{gpu:.1f}{brackets(gpu_median)} | {ratio} | {1e3 / gpu:.2f} | "
               f"{stepper.candidates() / count:.1f} |", flush=True)
 
 
