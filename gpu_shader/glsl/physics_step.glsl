@@ -72,7 +72,8 @@ layout(local_size_x = 64) in;
 // counters[]: colliding contacts per sweep, largest change per resting pass (float bits: a
 // non-negative float orders like its bits), events written, contact lists that overflowed,
 // the farthest any body moves in this step (float bits), the bodies the grid's walks met
-// in this step (GpuStepper.candidates).
+// in this step (GpuStepper.candidates), the bodies outside the grid (physics_grid.glsl),
+// and the bodies with a colliding contact in each sweep (collide_count's list).
 #define COUNT_COLLIDING 0
 #define COUNT_CHANGE MAX_ITERATIONS
 #define COUNT_EVENTS (2 * MAX_ITERATIONS)
@@ -80,6 +81,7 @@ layout(local_size_x = 64) in;
 #define COUNT_TRAVEL (2 * MAX_ITERATIONS + 2)
 #define COUNT_CANDIDATES (2 * MAX_ITERATIONS + 3)
 #define COUNT_OUTSIDE_GRID (2 * MAX_ITERATIONS + 4)
+#define COUNT_LISTED (2 * MAX_ITERATIONS + 5)
 
 struct Body {
     vec4 position;          // x_n (m), the state the step starts from and ends in
@@ -162,7 +164,7 @@ layout(std430, binding = 10) buffer Order {
     uint order_count[MAX_CONTACTS + 1];   // bodies with each number of contacts (begin_step)
     uint order_start[MAX_CONTACTS + 1];   // where each count's bodies start in `order`
     int order[];                          // 2 N: the bodies by contact count; each body's rank
-};
+};                                        // in begin_step, then each sweep's colliding bodies
 
 uniform int u_pass;          // the sweep or resting pass this dispatch runs
 uniform int u_read;          // velocity slot read by this dispatch (0 or 1)
@@ -555,6 +557,7 @@ bool sweep_hit(int i, int j, out float t) {
 void begin_step(int i) {
     if (i == 0) {
         for (int c = 0; c < COUNT_EVENTS; c++) counters[c] = 0u;
+        for (int c = 0; c < MAX_ITERATIONS; c++) counters[COUNT_LISTED + c] = 0u;
         counters[COUNT_TRAVEL] = 0u;
     }
     Body self = bodies[i];
@@ -636,10 +639,17 @@ void begin_step(int i) {
 // sweep u_pass (its mass is split among them), and whether anything collides at all. The
 // body's mass terms under that split go into the w components of its Motion row, where
 // collide_apply reads them as the other body's (other_body).
+//
+// It also carries the body's velocity and spin over to the slot this sweep writes, which
+// collide_apply overwrites for the bodies it changes, and lists the bodies with a colliding
+// contact (in the second half of `order`, COUNT_LISTED + u_pass of them): collide_apply
+// runs for those alone, so the 8 invocations llvmpipe runs in step are all bodies with work
+// (a quarter of a pile's bodies collide in a sweep, scattered through the order).
 void collide_count(int i) {
+    vec3 v_i = velocity_of(i), w_i = spin_of(i);
+    motion[(1 - u_read) * u_count + i] = Motion(vec4(v_i, 0.0), vec4(w_i, 0.0));
     if (u_pass > 0 && counters[COUNT_COLLIDING + u_pass - 1] == 0u) return;   // loop ended
     int start = list_start(i, u_list), count = bodies[i].contact_count[u_list];
-    vec3 v_i = velocity_of(i), w_i = spin_of(i);
     float r_i = radius_of(i);
     int colliding = 0;
     for (int c = 0; c < count; c++) {
@@ -653,39 +663,41 @@ void collide_count(int i) {
     vec2 masses = shared_masses(i, float(colliding));
     motion[u_read * u_count + i].velocity.w = masses.x;
     motion[u_read * u_count + i].spin.w = masses.y;
-    if (colliding > 0) atomicAdd(counters[COUNT_COLLIDING + u_pass], uint(colliding));
+    if (colliding > 0) {
+        atomicAdd(counters[COUNT_COLLIDING + u_pass], uint(colliding));
+        order[u_count + int(atomicAdd(counters[COUNT_LISTED + u_pass], 1u))] = i;
+    }
 }
 
 // The second half (solvers._collide): collision impulses with mass split among the colliding
 // contacts. Body i sums them in the order of its list: first the contacts where it is a, then
 // those where it is b, the order in which np.add.at adds them on the CPU.
+// Run for the bodies collide_count listed only: a body with no colliding contact gets no
+// impulse (collide_count classified its contacts from these very velocities), and its
+// velocity and spin are already in the slot this sweep writes.
 void collide_apply(int i) {
     vec3 v = velocity_of(i), w = spin_of(i);
     vec3 v_i = v, w_i = w;                        // read once for every contact
-    // collide_count classified this body's contacts from these very velocities: one with
-    // none colliding gets no impulse, and skips the loop that would find none again.
-    if (counters[COUNT_COLLIDING + u_pass] != 0u && bodies[i].colliding > 0) {
-        float r_i = radius_of(i);
-        vec2 own = shared_masses(i, float(bodies[i].colliding)), applied = impulse_masses(i);
-        int start = list_start(i, u_list), count = bodies[i].contact_count[u_list];
-        for (int c = 0; c < count; c++) {
-            Contact k = contacts[start + c];
-            bool first = is_a(i, k.other);
-            Other o = other_body(k.other, k.surface_velocity);
-            vec3 n = k.normal_gap.xyz;
-            vec3 v_rel = relative_velocity(first, v_i, w_i, r_i, o, n, k.surface_velocity.xyz);
-            if (k.gravity_part - dot3(v_rel, n) <= u_threshold) continue;
-            vec2 mass = effective_masses(first, own, o);
-            float j, approach;
-            vec3 impulse = collision_impulse(v_rel, n, k.gravity_part, k.coefficients.x,
-                                             k.coefficients.y, mass, u_threshold, j,
-                                             approach);
-            if (!(j > 0.0)) continue;
-            apply_impulse(first, n, impulse, applied, v, w);
-            if (first) {
-                record_event(u_pass, event_kind(k.other), i, event_other(k.other), k.slot,
-                             approach, j);
-            }
+    float r_i = radius_of(i);
+    vec2 own = shared_masses(i, float(bodies[i].colliding)), applied = impulse_masses(i);
+    int start = list_start(i, u_list), count = bodies[i].contact_count[u_list];
+    for (int c = 0; c < count; c++) {
+        Contact k = contacts[start + c];
+        bool first = is_a(i, k.other);
+        Other o = other_body(k.other, k.surface_velocity);
+        vec3 n = k.normal_gap.xyz;
+        vec3 v_rel = relative_velocity(first, v_i, w_i, r_i, o, n, k.surface_velocity.xyz);
+        if (k.gravity_part - dot3(v_rel, n) <= u_threshold) continue;
+        vec2 mass = effective_masses(first, own, o);
+        float j, approach;
+        vec3 impulse = collision_impulse(v_rel, n, k.gravity_part, k.coefficients.x,
+                                         k.coefficients.y, mass, u_threshold, j,
+                                         approach);
+        if (!(j > 0.0)) continue;
+        apply_impulse(first, n, impulse, applied, v, w);
+        if (first) {
+            record_event(u_pass, event_kind(k.other), i, event_other(k.other), k.slot,
+                         approach, j);
         }
     }
     motion[(1 - u_read) * u_count + i] = Motion(vec4(v, 0.0), vec4(w, 0.0));
@@ -1068,8 +1080,11 @@ void main() {
         return;
     }
     if (i >= u_count) return;                              // the others: one per body
-    if (STAGE == STAGE_COLLIDE_COUNT || STAGE == STAGE_COLLIDE_APPLY
-            || STAGE == STAGE_WARM_START || STAGE == STAGE_REST) {
+    if (STAGE == STAGE_COLLIDE_APPLY) {
+        if (uint(i) >= counters[COUNT_LISTED + u_pass]) return;
+        i = order[u_count + i];                            // collide_count's list
+    } else if (STAGE == STAGE_COLLIDE_COUNT || STAGE == STAGE_WARM_START
+            || STAGE == STAGE_REST) {
         i = order[i];                                      // the solver's order (Order)
     } else if (STAGE == STAGE_BEGIN || STAGE == STAGE_FINISH) {
         i = walk_order(i);                                 // by grid slot (physics_grid.glsl)
