@@ -672,6 +672,7 @@ void collide_count(int i) {
 // The second half (solvers._collide): collision impulses with mass split among the colliding
 // contacts. Body i sums them in the order of its list: first the contacts where it is a, then
 // those where it is b, the order in which np.add.at adds them on the CPU.
+//
 // Run for the bodies collide_count listed only: a body with no colliding contact gets no
 // impulse (collide_count classified its contacts from these very velocities), and its
 // velocity and spin are already in the slot this sweep writes.
