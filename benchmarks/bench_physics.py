@@ -181,7 +181,9 @@ def time_gpu(counts, seconds: float, repeat: int = 1) -> None:
     print("| spheres | contacts (last step) | CPU steps/s | GPU steps/s | GPU / CPU | "
           "GPU ms/step | GPU candidates per sphere |")
     print("| ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
-    warm_up = lambda world: int(round(0.25 / world.dt))       # noqa: E731
+    def cell(fastest: float, median: float, digits: int) -> str:      # "fastest (median)"
+        return f"{fastest:.{digits}f}" + (f" ({median:.{digits}f})" if repeat > 1 else "")
+
     for count in counts:
         cpu_walls, gpu_walls = [], []
         for _ in range(repeat):
@@ -191,17 +193,15 @@ def time_gpu(counts, seconds: float, repeat: int = 1) -> None:
             contacts = len(physics.contacts.find_contacts(world, world.slop))
             world = box_of_spheres(count, "simultaneous").copy(dtype="float32")
             stepper = GpuStepper(world)
-            stepper(warm_up(world))                           # the same warm-up as the CPU
+            stepper(int(round(0.25 / world.dt)))               # the same warm-up as the CPU
             start = time.perf_counter()
             stepper(steps)
             gpu_walls.append(time.perf_counter() - start)
         cpu, gpu = steps / min(cpu_walls), steps / min(gpu_walls)
         cpu_median, gpu_median = (steps / statistics.median(w) for w in (cpu_walls, gpu_walls))
-        brackets = (lambda value: f" ({value:.1f})" if repeat > 1 else "")  # noqa: E731
-        ratio = f"{gpu / cpu:.2f}" + (f" ({gpu_median / cpu_median:.2f})" if repeat > 1 else "")
-        print(f"| {count:,} | {contacts:,} | {cpu:.1f}{brackets(cpu_median)} | "
-              f"{gpu:.1f}{brackets(gpu_median)} | {ratio} | {1e3 / gpu:.2f} | "
-              f"{stepper.candidates() / count:.1f} |", flush=True)
+        print(f"| {count:,} | {contacts:,} | {cell(cpu, cpu_median, 1)} | "
+              f"{cell(gpu, gpu_median, 1)} | {cell(gpu / cpu, gpu_median / cpu_median, 2)} | "
+              f"{1e3 / gpu:.2f} | {stepper.candidates() / count:.1f} |", flush=True)
 
 
 if __name__ == "__main__":

@@ -109,14 +109,15 @@ def bullet_stepper(count: int):
     return step
 
 
-def seconds_per_step(step, seconds: float, warm_up: float = WARM_UP) -> float:
-    """Seconds of computing per step of ``step(n)``, timed over ``seconds`` of simulated time
-    after ``warm_up`` (both at dt = 1/240 s)."""
+def seconds_per_step(step, seconds: float, warm_up: float = WARM_UP,
+                     clock=time.perf_counter) -> float:
+    """Seconds of computing per step of ``step(n)``, timed by ``clock`` over ``seconds`` of
+    simulated time after ``warm_up`` (both at dt = 1/240 s)."""
     step(round(warm_up / DT))
     steps = max(1, round(seconds / DT))
-    start = time.perf_counter()
+    start = clock()
     step(steps)
-    return (time.perf_counter() - start) / steps
+    return (clock() - start) / steps
 
 
 def alternating_runs(makers, seconds: float, repeat: int, warm_up: float = WARM_UP):
@@ -126,15 +127,10 @@ def alternating_runs(makers, seconds: float, repeat: int, warm_up: float = WARM_
     same simulation (a pile is busiest just after the warm-up and grows calmer), so the
     fastest and the median of the runs compare like with like. Returns one list of
     ``repeat`` figures per maker."""
-    steps = max(1, round(seconds / DT))
     runs = [[] for _ in makers]
     for _ in range(repeat):
         for make, figures in zip(makers, runs):
-            step = make()
-            step(round(warm_up / DT))
-            start = time.process_time()
-            step(steps)
-            figures.append((time.process_time() - start) / steps)
+            figures.append(seconds_per_step(make(), seconds, warm_up, time.process_time))
     return runs
 
 

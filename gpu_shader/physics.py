@@ -48,8 +48,9 @@ How it differs from the CPU step, and why:
   of cells along x in consecutive slots), sorted by cell with a counting sort every step,
   cells as wide as the largest sphere plus the slop: each body looks for the spheres it may
   touch, or meet on its way, in the rows of cells around it, about O(N); the two stages that
-  do (begin_step, finish_step) take the bodies in the grid's order, neighbours together. It finds exactly the pairs a loop over every pair finds (``all_pairs=True`` runs that
-  loop; tests compare the two), and each body keeps its contacts in the order the CPU sums
+  do (begin_step, finish_step) take the bodies in the grid's order, neighbours together. It
+  finds exactly the pairs a loop over every pair finds (``all_pairs=True`` runs that loop;
+  tests compare the two), and each body keeps its contacts in the order the CPU sums
   them (by the other's index), so the sums are the CPU's. The CPU keeps one grid per size
   class instead: here a few large spheres among many small ones make the cells, and the
   walks, larger (correct, slower). The sweep test's walks widen by the farthest any sphere
