@@ -135,10 +135,11 @@ def solve_simultaneous(bodies: SolverBodies, contacts, gravity_part, h, threshol
     """
     counter = Counter() if counter is None else counter
     every = slice(None)                 # all contacts, as views rather than copies
+    rows = _level_rows(bodies, contacts, every)     # where every sweep's impulses go
     collisions = []
     for _ in range(iterations):
         counter["collision sweeps"] += 1
-        hit = _collide_together(bodies, contacts, gravity_part, threshold)
+        hit = _collide_together(bodies, contacts, gravity_part, threshold, rows)
         if hit is None:
             break
         collisions.append(hit)
@@ -148,7 +149,6 @@ def solve_simultaneous(bodies: SolverBodies, contacts, gravity_part, h, threshol
     normal_total, tangent_total = warm
     _apply_warm_start(bodies, contacts, normal_total, tangent_total)
     target = _resting_target(contacts, h)
-    rows = _level_rows(bodies, contacts, every)
     for _ in range(iterations):
         counter["resting passes"] += 1
         if _rest(bodies, contacts, every, target, k_normal, k_tangent, normal_total,
@@ -255,20 +255,34 @@ def _count(bodies, a, b):
                        minlength=len(bodies.velocity)).astype(bodies.velocity.dtype)
 
 
-def _collide_together(bodies, contacts, gravity_part, threshold):
+def _collide_together(bodies, contacts, gravity_part, threshold, rows):
     """One Jacobi collision sweep: every contact from the same velocities, mass split among the
-    contacts that collide. Applied; None if nothing collides."""
+    contacts that collide. Applied through ``rows`` (`_level_rows` of every contact); None if
+    nothing collides.
+
+    The sweep is worked out for every contact, not only the colliding ones: the others get a
+    zero impulse (`collision_impulse`), and adding zero leaves a velocity as it was. That
+    spares gathering the colliding contacts' rows and working out where their impulses go in
+    each sweep, some 30 NumPy calls: with ~150 contacts a call costs about the same for all
+    of them as for the few that collide (a fifth, in a pile).
+    """
     a, b, n = contacts.a, contacts.b, contacts.normal
     v_rel = relative_velocity(bodies, a, b, n, contacts.radius_a, contacts.radius_b,
                               contacts.surface_velocity)
-    approach = gravity_part - dot(v_rel, n)
-    colliding = np.flatnonzero(approach > threshold)
-    if len(colliding) == 0:
+    colliding = gravity_part - dot(v_rel, n) > threshold
+    if not colliding.any():
         return None
-    share = _count(bodies, a[colliding], b[colliding])
+    # A body in no colliding contact keeps share 1: its contacts' impulses are zero whatever
+    # their k, and k must not be 0.
+    share = np.maximum(_count(bodies, a[colliding], b[colliding]), 1)
     k_normal, k_tangent = _masses(bodies, contacts, share)
-    return _collide(bodies, contacts, colliding, gravity_part, k_normal, k_tangent, threshold,
-                    v_rel[colliding])
+    impulse, j, approach = collision_impulse(v_rel, n, gravity_part, contacts.restitution,
+                                             contacts.friction, k_normal, k_tangent, threshold)
+    hit = np.flatnonzero(j > 0)
+    if not len(hit):
+        return None
+    apply_rows(bodies, n, impulse, rows)
+    return hit, approach[hit], j[hit]
 
 
 def _resting_target(contacts, h):
