@@ -291,15 +291,12 @@ def _resting_target(contacts, h):
     return -np.maximum(contacts.gap, 0) / h
 
 
-def _collide(bodies, contacts, index, gravity_part, k_normal, k_tangent, threshold,
-             v_rel=None):
-    """Collision impulses for contacts ``index``, applied; None if none of them collides.
-    ``v_rel`` is their relative velocity where the caller has it already (the same values)."""
+def _collide(bodies, contacts, index, gravity_part, k_normal, k_tangent, threshold):
+    """Collision impulses for contacts ``index`` (a level of the sequential solver), applied;
+    None if none of them collides."""
     a, b, n = contacts.a[index], contacts.b[index], take_rows(contacts.normal, index)
     ra, rb = contacts.radius_a[index], contacts.radius_b[index]
-    if v_rel is None:
-        v_rel = relative_velocity(bodies, a, b, n, ra, rb,
-                                  take_rows(contacts.surface_velocity, index))
+    v_rel = relative_velocity(bodies, a, b, n, ra, rb, take_rows(contacts.surface_velocity, index))
     impulse, j, approach = collision_impulse(
         v_rel, n, gravity_part[index], contacts.restitution[index], contacts.friction[index],
         k_normal[index], k_tangent[index], threshold)
