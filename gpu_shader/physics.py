@@ -100,12 +100,12 @@ STAGES = dict(begin=0, collide_count=1, collide_apply=2, warm_start=3, rest=4, p
 INTEGRATOR_CODES = {"explicit": 0, "semi_implicit": 1, "verlet": 2}
 # The shader's event kinds, in the order the CPU records the events of one collision sweep.
 EVENT_KINDS = np.array(["sphere-plane", "sphere-shape", "sphere-sphere", "left-bounds"])
-COUNT_EVENTS = 2 * MAX_ITERATIONS
-COUNT_OVERFLOW = 2 * MAX_ITERATIONS + 1
-COUNT_CANDIDATES = 2 * MAX_ITERATIONS + 3
-COUNT_OUTSIDE_GRID = 2 * MAX_ITERATIONS + 4
-COUNT_LISTED = 2 * MAX_ITERATIONS + 5     # MAX_ITERATIONS of them
-COUNTERS = 3 * MAX_ITERATIONS + 5
+COUNT_EVENTS = MAX_ITERATIONS
+COUNT_OVERFLOW = MAX_ITERATIONS + 1
+COUNT_CANDIDATES = MAX_ITERATIONS + 3
+COUNT_OUTSIDE_GRID = MAX_ITERATIONS + 4
+COUNT_LISTED = MAX_ITERATIONS + 5     # MAX_ITERATIONS of them
+COUNTERS = 2 * MAX_ITERATIONS + 5
 
 # The std430 layouts of the shader's structs, field by field.
 VEC4 = ("<f4", 4)

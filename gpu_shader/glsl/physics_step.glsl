@@ -69,19 +69,18 @@ layout(local_size_x = 64) in;
 #define CCD_PASSES 3              // bounce_off_statics(passes=3)
 #define SETTLED 1e-9              // physics.solvers.SETTLED (m/s)
 
-// counters[]: colliding contacts per sweep, largest change per resting pass (float bits: a
-// non-negative float orders like its bits), events written, contact lists that overflowed,
-// the farthest any body moves in this step (float bits), the bodies the grid's walks met
-// in this step (GpuStepper.candidates), the bodies outside the grid (physics_grid.glsl),
-// and the bodies with a colliding contact in each sweep (collide_count's list).
-#define COUNT_COLLIDING 0
-#define COUNT_CHANGE MAX_ITERATIONS
-#define COUNT_EVENTS (2 * MAX_ITERATIONS)
-#define COUNT_OVERFLOW (2 * MAX_ITERATIONS + 1)
-#define COUNT_TRAVEL (2 * MAX_ITERATIONS + 2)
-#define COUNT_CANDIDATES (2 * MAX_ITERATIONS + 3)
-#define COUNT_OUTSIDE_GRID (2 * MAX_ITERATIONS + 4)
-#define COUNT_LISTED (2 * MAX_ITERATIONS + 5)
+// counters[]: largest change per resting pass (float bits: a non-negative float orders like
+// its bits), events written, contact lists that overflowed, the farthest any body moves in
+// this step (float bits), the bodies the grid's walks met in this step
+// (GpuStepper.candidates), the bodies outside the grid (physics_grid.glsl), and the bodies
+// with a colliding contact in each sweep (collide_count's list: none, and the sweeps end).
+#define COUNT_CHANGE 0
+#define COUNT_EVENTS MAX_ITERATIONS
+#define COUNT_OVERFLOW (MAX_ITERATIONS + 1)
+#define COUNT_TRAVEL (MAX_ITERATIONS + 2)
+#define COUNT_CANDIDATES (MAX_ITERATIONS + 3)
+#define COUNT_OUTSIDE_GRID (MAX_ITERATIONS + 4)
+#define COUNT_LISTED (MAX_ITERATIONS + 5)
 
 struct Body {
     vec4 position;          // x_n (m), the state the step starts from and ends in
@@ -206,6 +205,16 @@ uniform int u_all_pairs;     // 1: every walk tests every body (the textbook loo
 
 // dot written out in the CPU's order, (a.x b.x + a.y b.y) + a.z b.z (scene_model.geometry.dot).
 float dot3(vec3 a, vec3 b) { return (a.x * b.x + a.y * b.y) + a.z * b.z; }
+
+// counters[c] = max(counters[c], value), for the maxima over all bodies of a dispatch (a
+// resting pass's largest change, a step's farthest travel; float bits, which order as the
+// non-negative floats do). An atomic only where value exceeds what was read: the counter only
+// grows within the dispatch, so a value no larger than a (possibly stale) read cannot be the
+// maximum. Ten thousand atomics on one word from both of llvmpipe's threads serialise them
+// (the word's cache line passes from core to core): this costs a read each, and a few atomics.
+void atomic_max_float(int c, float value) {
+    if (floatBitsToUint(value) > counters[c]) atomicMax(counters[c], floatBitsToUint(value));
+}
 
 // Row-wise cross product p x q (physics.impulses.cross).
 vec3 cross3(vec3 p, vec3 q) {
@@ -648,7 +657,7 @@ void begin_step(int i) {
 void collide_count(int i) {
     vec3 v_i = velocity_of(i), w_i = spin_of(i);
     motion[(1 - u_read) * u_count + i] = Motion(vec4(v_i, 0.0), vec4(w_i, 0.0));
-    if (u_pass > 0 && counters[COUNT_COLLIDING + u_pass - 1] == 0u) return;   // loop ended
+    if (u_pass > 0 && counters[COUNT_LISTED + u_pass - 1] == 0u) return;      // loop ended
     int start = list_start(i, u_list), count = bodies[i].contact_count[u_list];
     float r_i = radius_of(i);
     int colliding = 0;
@@ -663,10 +672,7 @@ void collide_count(int i) {
     vec2 masses = shared_masses(i, float(colliding));
     motion[u_read * u_count + i].velocity.w = masses.x;
     motion[u_read * u_count + i].spin.w = masses.y;
-    if (colliding > 0) {
-        atomicAdd(counters[COUNT_COLLIDING + u_pass], uint(colliding));
-        order[u_count + int(atomicAdd(counters[COUNT_LISTED + u_pass], 1u))] = i;
-    }
+    if (colliding > 0) order[u_count + int(atomicAdd(counters[COUNT_LISTED + u_pass], 1u))] = i;
 }
 
 // The second half (solvers._collide): collision impulses with mass split among the colliding
@@ -753,7 +759,7 @@ void rest_pass(int i) {
             apply_impulse(first, n, impulse, applied, v, w);
             change = max(change, sqrt(dot3(impulse, impulse)) * mass.y);
         }
-        atomicMax(counters[COUNT_CHANGE + u_pass], floatBitsToUint(change));
+        atomic_max_float(COUNT_CHANGE + u_pass, change);
     }
     motion[(1 - u_read) * u_count + i] = Motion(vec4(v, own.x), vec4(w, own.y));
 }
@@ -985,7 +991,7 @@ void integrate_positions(int i) {
     vec3 d = x_new - x_old;
     float travel = sqrt(dot3(d, d));
     if (self.start_in_world != 0 && finite3(d)) {
-        atomicMax(counters[COUNT_TRAVEL], floatBitsToUint(travel));
+        atomic_max_float(COUNT_TRAVEL, travel);
     }
     bodies[i].velocity = vec4(v_new, 0.0);
     bodies[i].spin = vec4(spin, 0.0);
