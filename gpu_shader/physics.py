@@ -478,8 +478,8 @@ def cpu_events(raw: np.ndarray, dt: float) -> np.ndarray:
     a continuous pass or the bounds check by body."""
     sweep = raw["stage"] < 100
     kind = np.where(sweep, raw["kind"], 0)
-    raw = raw[np.lexsort((raw["slot"], raw["other"], raw["body"], kind, raw["stage"],
-                          raw["step"]))]
+    raw = raw.take(lexicographic_order([raw["step"], raw["stage"], kind, raw["body"],
+                                        raw["other"], raw["slot"]]))
     events = np.zeros(len(raw), EVENT_DTYPE)
     events["step"] = raw["step"]
     events["time"] = raw["step"] * dt
@@ -487,6 +487,27 @@ def cpu_events(raw: np.ndarray, dt: float) -> np.ndarray:
     for name in ("body", "other", "speed", "impulse"):
         events[name] = raw[name]
     return events
+
+
+def lexicographic_order(keys: list) -> np.ndarray:
+    """The stable order (K,) of rows sorted by ``keys`` (integer arrays (K,)), the first the
+    most significant: np.lexsort's, with its keys the other way round.
+
+    The keys are read as the digits of one int64 number, each in base (its largest value -
+    its smallest + 1), and that number is argsorted: one sort instead of lexsort's one per
+    key, two to three times faster on the 40,000 events a step of a 10,000-sphere pile
+    records (and ``take`` rather than fancy indexing gathers the structured rows, which it
+    does twenty times faster). Keys whose digits would not fit in 63 bits go to np.lexsort.
+    """
+    number, span = np.zeros(len(keys[0]), np.int64), 1
+    for key in keys:
+        low = int(key.min()) if len(key) else 0
+        base = (int(key.max()) if len(key) else 0) - low + 1
+        span *= base
+        if span >= 2 ** 63:
+            return np.lexsort(keys[::-1])
+        number = number * base + (key.astype(np.int64) - low)
+    return np.argsort(number, kind="stable")
 
 
 def _set_uniform(program, name: str, value) -> None:
