@@ -105,7 +105,7 @@ COUNT_OVERFLOW = MAX_ITERATIONS + 1
 COUNT_CANDIDATES = MAX_ITERATIONS + 3
 COUNT_OUTSIDE_GRID = MAX_ITERATIONS + 4
 COUNT_LISTED = MAX_ITERATIONS + 5     # MAX_ITERATIONS of them
-COUNTERS = 2 * MAX_ITERATIONS + 5
+COUNTERS = COUNT_LISTED + MAX_ITERATIONS    # the shader's counters[] (physics_step.glsl)
 
 # The std430 layouts of the shader's structs, field by field.
 VEC4 = ("<f4", 4)
@@ -499,10 +499,12 @@ def lexicographic_order(keys: list) -> np.ndarray:
     records (and ``take`` rather than fancy indexing gathers the structured rows, which it
     does twenty times faster). Keys whose digits would not fit in 63 bits go to np.lexsort.
     """
+    if not len(keys[0]):
+        return np.zeros(0, np.intp)
     number, span = np.zeros(len(keys[0]), np.int64), 1
     for key in keys:
-        low = int(key.min()) if len(key) else 0
-        base = (int(key.max()) if len(key) else 0) - low + 1
+        low = int(key.min())
+        base = int(key.max()) - low + 1
         span *= base
         if span >= 2 ** 63:
             return np.lexsort(keys[::-1])
