@@ -114,11 +114,16 @@ def effective_masses(inverse_mass_a, inverse_mass_b, inverse_inertia_a, inverse_
     return k_normal, k_tangent
 
 
+SHORTEST = 1e-37    # N s: a normal float32 number (a GPU may flush smaller ones to 0)
+
+
 def friction_impulse(v_tangent: np.ndarray, k_tangent, limit) -> np.ndarray:
     """Coulomb friction: -v_t / k_t (K, 3), shortened to length ``limit`` (K,) where longer."""
     sticking = -v_tangent / k_tangent[:, None]
     length = np.sqrt(dot(sticking, sticking))
-    scale = np.where(length > limit, limit / np.where(length > 0, length, 1), 1)
+    # limit / length where longer, else length / length = 1: no branch, and a length below
+    # SHORTEST (where the impulse is 0, or as good as) counts as SHORTEST, never divides by 0.
+    scale = np.minimum(limit, length) / np.maximum(length, SHORTEST)
     return sticking * scale[:, None]
 
 

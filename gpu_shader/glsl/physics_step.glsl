@@ -323,11 +323,13 @@ vec2 effective_masses(bool first, vec2 own, Other o) {
     return vec2(k_normal, k_tangent);
 }
 
-// Coulomb friction: -v_t / k_t, shortened to length `limit` where longer.
+// Coulomb friction: -v_t / k_t, shortened to length `limit` where longer: limit / len, else
+// len / len = 1, with a length below SHORTEST counted as SHORTEST (impulses.SHORTEST).
+const float SHORTEST = 1e-37;
 vec3 friction_impulse(vec3 v_tangent, float k_tangent, float limit) {
     vec3 sticking = -v_tangent / k_tangent;
     float len = sqrt(dot3(sticking, sticking));
-    float scale = len > limit ? limit / (len > 0.0 ? len : 1.0) : 1.0;
+    float scale = min(limit, len) / max(len, SHORTEST);
     return sticking * scale;
 }
 
