@@ -34,36 +34,74 @@ from scene_model.geometry import dot
 class SolverBodies:
     """Velocities and inverse masses of N spheres plus the static world as row N.
 
-    velocity, spin : (N + 1, 3) m/s and rad/s; row N stays zero.
+    motion : (N + 1, 6)
+        Each body's velocity (m/s) then spin (rad/s); row N stays zero. One array, so that a
+        contact gathers what it needs of its bodies in one `take` and an impulse's two effects
+        go in one scattered add; stored column by column (`columns`). ``velocity`` and
+        ``spin`` are its halves, (N + 1, 3) views.
     inverse_mass : (N + 1,) 1/kg, inverse_inertia : (N + 1,) 1/(kg m^2); 0 in row N.
     """
-    velocity: np.ndarray
-    spin: np.ndarray
+    motion: np.ndarray
     inverse_mass: np.ndarray
     inverse_inertia: np.ndarray
 
+    def __post_init__(self):
+        self.motion = columns(self.motion)
 
-_NEXT, _AFTER = np.array([1, 2, 0]), np.array([2, 0, 1])    # y z x and z x y
+    @property
+    def velocity(self) -> np.ndarray:
+        return self.motion[:, :3]
+
+    @property
+    def spin(self) -> np.ndarray:
+        return self.motion[:, 3:]
+
+
+def columns(array: np.ndarray) -> np.ndarray:
+    """The same (K, C) array stored column by column (Fortran order); itself if it already is.
+
+    NumPy runs its inner loops along the last axis: on rows of 3 they are 3 long, and an
+    operation of a (K,) array with a (K, 3) one, the solvers' commonest, pays a loop per row.
+    With x, y and z each contiguous the same arithmetic runs along K, as in the reference
+    tracer (reference_cpu.march.columns). No value changes: only where the numbers lie.
+    """
+    return np.asfortranarray(array)
+
+
+# The columns of p and q that p x q multiplies: (y z x | z x y) of p times (z x y | y z x) of q.
+_P_COLUMNS, _Q_COLUMNS = np.array([1, 2, 0, 2, 0, 1]), np.array([2, 0, 1, 1, 2, 0])
 
 
 def cross(p: np.ndarray, q: np.ndarray) -> np.ndarray:
     """Row-wise cross product p x q of (K, 3) arrays, written out (np.cross is slower here)."""
-    # All three components at once, p_y q_z - p_z q_y and its rotations: the same products
-    # and differences as component by component, in a third of the NumPy calls (the columns
-    # taken by `take`, as `take_rows` takes rows).
-    return (p.take(_NEXT, axis=1) * q.take(_AFTER, axis=1)
-            - p.take(_AFTER, axis=1) * q.take(_NEXT, axis=1))
+    return cross_of_columns(cross_columns(p, "p"), cross_columns(q, "q"))
+
+
+def cross_columns(v: np.ndarray, side: str) -> np.ndarray:
+    """The columns (K, 6) of v (K, 3) that a cross product p x q multiplies, where v is p
+    (``side`` "p": y z x z x y) or q ("q": z x y y z x); worked out once for a vector that
+    takes part in many products (a contact's normal, in every solver pass)."""
+    # Taken as rows of the transpose, so that arrays stored column by column stay so.
+    return v.T.take(_P_COLUMNS if side == "p" else _Q_COLUMNS, axis=0).T
+
+
+def cross_of_columns(p_columns: np.ndarray, q_columns: np.ndarray) -> np.ndarray:
+    """p x q (K, 3) from the `cross_columns` of p and q: the six products at once, p_y q_z,
+    p_z q_x, p_x q_y | p_z q_y, p_x q_z, p_y q_x, then the first three minus the last three,
+    the same products and differences as component by component in two NumPy calls."""
+    products = p_columns * q_columns
+    return products[:, :3] - products[:, 3:]
 
 
 def take_rows(array: np.ndarray, index) -> np.ndarray:
-    """array[index]: the rows ``index`` (K,) of an (N, C) array, or a view where ``index`` is a
-    slice.
+    """array[index]: the rows ``index`` (K,) of an (N, C) array, stored column by column
+    (`columns`), or a view where ``index`` is a slice.
 
     The same rows as fancy indexing, by ``ndarray.take``, which skips most of its work on the
-    arguments: 1.4 against 4.5 microseconds for 100 rows of 3, and a step of 100 spheres
-    gathers rows some 80 times.
+    arguments (1.4 against 4.5 microseconds for 100 rows of 3), gathering along each column
+    of the transpose.
     """
-    return array[index] if isinstance(index, slice) else array.take(index, axis=0)
+    return array[index] if isinstance(index, slice) else array.T.take(index, axis=1).T
 
 
 def scatter_add(target: np.ndarray, rows, values: np.ndarray) -> None:
@@ -95,13 +133,15 @@ def add_at_flat(target: np.ndarray, flat, values) -> None:
     np.add.at(view, flat, np.asarray(values).reshape(-1))
 
 
-def relative_velocity(bodies: SolverBodies, a, b, normal, radius_a, radius_b,
-                      surface=None) -> np.ndarray:
-    """v_rel (K, 3) of a's contact point relative to b's (m/s); ``surface`` (K, 3), the
-    velocity of a moving static surface b (a kinematic object), is b's where given."""
-    spin, velocity = bodies.spin, bodies.velocity
-    lever = radius_a[:, None] * take_rows(spin, a) + radius_b[:, None] * take_rows(spin, b)
-    v_rel = take_rows(velocity, a) - take_rows(velocity, b) - cross(lever, normal)
+def relative_velocity(bodies: SolverBodies, rows: "ContactRows", surface=None) -> np.ndarray:
+    """v_rel (K, 3) of a's contact point relative to b's (m/s), for the contacts of ``rows``
+    (`contact_rows`); ``surface`` (K, 3), the velocity of a moving static surface b (a
+    kinematic object), is b's where given."""
+    motion_a, motion_b = take_rows(bodies.motion, rows.a), take_rows(bodies.motion, rows.b)
+    turning = rows.radius_a * motion_a[:, 3:] + rows.radius_b * motion_b[:, 3:]
+    # v_a - v_b - (r_a w_a + r_b w_b) x n, with n's columns for the product taken once.
+    v_rel = (motion_a[:, :3] - motion_b[:, :3]
+             - cross_of_columns(cross_columns(turning, "p"), rows.normal_as_q))
     return v_rel if surface is None else v_rel - surface
 
 
@@ -128,7 +168,7 @@ def friction_impulse(v_tangent: np.ndarray, k_tangent, limit) -> np.ndarray:
 
 
 def collision_impulse(v_rel, normal, gravity_part, restitution, friction, k_normal, k_tangent,
-                      threshold):
+                      threshold, u=None):
     """The impulse of one collision, from the current relative velocity.
 
     Parameters
@@ -148,6 +188,8 @@ def collision_impulse(v_rel, normal, gravity_part, restitution, friction, k_norm
     threshold : float
         Approach speeds below this (m/s) do not bounce: the restitution threshold that lets
         resting contact rest.
+    u : (K,), optional
+        n . v_rel, where the caller has worked it out already (m/s).
 
     Returns
     -------
@@ -158,7 +200,7 @@ def collision_impulse(v_rel, normal, gravity_part, restitution, friction, k_norm
     approach : (K,)
         Approach speed -n.v_rel before this step's gravity (m/s); positive means approaching.
     """
-    u = dot(v_rel, normal)
+    u = dot(v_rel, normal) if u is None else u
     approach = gravity_part - u
     colliding = approach > threshold
     # The normal velocity afterwards is e times the approach speed, leaving: solve for j.
@@ -172,41 +214,61 @@ def collision_impulse(v_rel, normal, gravity_part, restitution, friction, k_norm
 
 def apply_impulse(bodies: SolverBodies, a, b, normal, radius_a, radius_b, impulse) -> None:
     """Add P to body a and -P to b (rows of ``bodies``, in place; sums repeated bodies)."""
-    apply_rows(bodies, normal, impulse, impulse_rows(bodies, a, b, radius_a, radius_b))
+    apply_rows(bodies, impulse, contact_rows(bodies, a, b, radius_a, radius_b, normal))
 
 
 @dataclass
-class ImpulseRows:
-    """Where the impulses of K contacts go, a's rows then b's (2K of each), worked out once
-    for a solver's passes over the same contacts.
+class ContactRows:
+    """Where K contacts find their bodies in `SolverBodies.motion`, worked out once for a
+    solver's passes over the same contacts.
 
-    flat : (6K,) int, the elements of a (N + 1, 3) array, row by row;
-    linear : (2K, 1) 1/kg, +1/m_a then -1/m_b; angular : (2K, 1), -r_a / I_a then -r_b / I_b.
+    a, b : (K,) int, the bodies;
+    radius_a, radius_b : (K, 3) m, the lever arms r_a and r_b, one column each for x, y, z
+        (so that r w is a product of equal shapes, NumPy's fastest);
+    normal : (K, 3), the unit normals n, stored column by column (`columns`), and
+    normal_as_p, normal_as_q : (K, 6), their `cross_columns` for n x q and p x n;
+    flat : (12 K,) int, where `apply_rows` adds: the elements of the rows in the flat view of
+        motion's transpose, (6, N + 1): a's velocity x, y, z and spin x, y, z, then b's;
+    scale : (12, K), what P and n x P are multiplied by for them: 1/m_a (three rows),
+        -r_a / I_a (three), -1/m_b, -r_b / I_b.
     """
+    a: np.ndarray
+    b: np.ndarray
+    radius_a: np.ndarray
+    radius_b: np.ndarray
+    normal: np.ndarray
+    normal_as_p: np.ndarray
+    normal_as_q: np.ndarray
     flat: np.ndarray
-    linear: np.ndarray
-    angular: np.ndarray
+    scale: np.ndarray
 
 
-def impulse_rows(bodies: SolverBodies, a, b, radius_a, radius_b) -> ImpulseRows:
-    """`ImpulseRows` of contacts between bodies a (K,) and b (K,)."""
+def contact_rows(bodies: SolverBodies, a, b, radius_a, radius_b, normal) -> ContactRows:
+    """`ContactRows` of contacts between bodies a (K,) and b (K,) with normals (K, 3)."""
     im, ii = bodies.inverse_mass, bodies.inverse_inertia
-    return ImpulseRows(flat_index(np.concatenate([a, b]), 3),
-                       np.concatenate([im[a], -im[b]])[:, None],
-                       np.concatenate([-(radius_a * ii[a]), -(radius_b * ii[b])])[:, None])
+    scale = np.repeat(np.stack([im[a], -(radius_a * ii[a]), -im[b], -(radius_b * ii[b])]), 3,
+                      axis=0)
+    body = np.repeat(np.stack([a, b]), 6, axis=0)                      # (12, K)
+    flat = (body + np.tile(np.arange(6), 2)[:, None] * len(im)).reshape(-1)
+    lever = lambda r: columns(np.repeat(r[:, None], 3, axis=1))       # noqa: E731
+    normal = columns(normal)
+    return ContactRows(a, b, lever(radius_a), lever(radius_b), normal,
+                       cross_columns(normal, "p"), cross_columns(normal, "q"), flat, scale)
 
 
-def apply_rows(bodies: SolverBodies, normal, impulse, rows: ImpulseRows) -> None:
-    """`apply_impulse` with its rows worked out (`impulse_rows`).
+def apply_rows(bodies: SolverBodies, impulse, rows: ContactRows) -> None:
+    """`apply_impulse` with its rows worked out (`contact_rows`).
 
-    One scattered add for a's rows then b's (the same additions in the same order as two:
-    a's all first), for velocity and for spin; np.add.at costs per call, not per row, and
-    adds along one-dimensional indices fastest (`scatter_add`). -P/m_b is P times -1/m_b,
-    the same number: a product's rounding does not depend on the signs.
+    One scattered add for a's rows then b's, velocity and spin together: every element gets
+    the same additions in the same order as from one add per body and per quantity (a's all
+    first), and np.add.at costs per call, not per row, and adds along one-dimensional indices
+    fastest (`scatter_add`). -P/m_b is P times -1/m_b, the same number: a product's rounding
+    does not depend on the signs.
     """
-    turn = cross(normal, impulse)
-    add_at_flat(bodies.velocity, rows.flat, np.concatenate([impulse, impulse]) * rows.linear)
-    add_at_flat(bodies.spin, rows.flat, np.concatenate([turn, turn]) * rows.angular)
+    turn = cross_of_columns(rows.normal_as_p, cross_columns(impulse, "q"))     # n x P
+    push, turn = impulse.T, turn.T                                     # (3, K) each
+    change = np.concatenate([push, turn, push, turn])                  # a's, then b's
+    add_at_flat(bodies.motion.T, rows.flat, change * rows.scale)
 
 
 def contact_impulse(v_rel, normal, target, friction, k_normal, k_tangent, normal_total,

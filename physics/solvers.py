@@ -48,12 +48,13 @@ cradle behaves sequentially because the impact runs through the balls as a wave.
 from __future__ import annotations
 
 from collections import Counter
+from dataclasses import replace
 
 import numpy as np
 
 from physics.colliders import MAX_SHAPE_CONTACTS
 from physics.impulses import (SolverBodies, apply_impulse, apply_rows, collision_impulse,
-                              contact_impulse, effective_masses, impulse_rows,
+                              columns, contact_impulse, contact_rows, effective_masses,
                               relative_velocity, scatter_add, take_rows)
 from scene_model.geometry import dot
 
@@ -96,15 +97,18 @@ def solve_sequential(bodies: SolverBodies, contacts, gravity_part, h, threshold,
     them one by one.
     """
     counter = Counter() if counter is None else counter
+    contacts = _in_columns(contacts)
     k_normal, k_tangent = _masses(bodies, contacts, 1)
     levels = sequential_levels(contacts.a, contacts.b, len(bodies.velocity) - 1)
     counter["solver levels"] += len(levels)
+    rows = [_level_rows(bodies, contacts, level) for level in levels]
     collisions = []
     for _ in range(iterations):
         counter["collision sweeps"] += 1
         collided = False
-        for level in levels:
-            hit = _collide(bodies, contacts, level, gravity_part, k_normal, k_tangent, threshold)
+        for level, where in zip(levels, rows):
+            hit = _collide(bodies, contacts, level, where, gravity_part, k_normal, k_tangent,
+                           threshold)
             if hit is not None:
                 collisions.append(hit)
                 collided = True
@@ -112,9 +116,9 @@ def solve_sequential(bodies: SolverBodies, contacts, gravity_part, h, threshold,
             break
 
     normal_total, tangent_total = warm
-    _apply_warm_start(bodies, contacts, normal_total, tangent_total)
+    _apply_warm_start(bodies, contacts, normal_total, tangent_total,
+                      _level_rows(bodies, contacts, slice(None)))
     target = _resting_target(contacts, h)
-    rows = [_level_rows(bodies, contacts, level) for level in levels]
     for _ in range(iterations):
         counter["resting passes"] += 1
         change = max((_rest(bodies, contacts, level, target, k_normal, k_tangent, normal_total,
@@ -134,6 +138,7 @@ def solve_simultaneous(bodies: SolverBodies, contacts, gravity_part, h, threshol
     contacts.
     """
     counter = Counter() if counter is None else counter
+    contacts = _in_columns(contacts)
     every = slice(None)                 # all contacts, as views rather than copies
     rows = _level_rows(bodies, contacts, every)     # where every sweep's impulses go
     collisions = []
@@ -147,7 +152,7 @@ def solve_simultaneous(bodies: SolverBodies, contacts, gravity_part, h, threshol
     share = _count(bodies, contacts.a, contacts.b)
     k_normal, k_tangent = _masses(bodies, contacts, share)
     normal_total, tangent_total = warm
-    _apply_warm_start(bodies, contacts, normal_total, tangent_total)
+    _apply_warm_start(bodies, contacts, normal_total, tangent_total, rows)
     target = _resting_target(contacts, h)
     for _ in range(iterations):
         counter["resting passes"] += 1
@@ -201,7 +206,7 @@ def warm_start(keys, previous, dtype):
     many passes within one. ``previous`` is (keys, normal, tangent) from the last step or None.
     """
     normal = np.zeros(len(keys), dtype)
-    tangent = np.zeros((len(keys), 3), dtype)
+    tangent = np.zeros((len(keys), 3), dtype, order="F")
     if previous is not None and len(previous[0]) and len(keys):
         old_keys, old_normal, old_tangent = previous
         slot = np.minimum(np.searchsorted(old_keys, keys), len(old_keys) - 1)
@@ -267,9 +272,9 @@ def _collide_together(bodies, contacts, gravity_part, threshold, rows):
     of them as for the few that collide (a fifth, in a pile).
     """
     a, b, n = contacts.a, contacts.b, contacts.normal
-    v_rel = relative_velocity(bodies, a, b, n, contacts.radius_a, contacts.radius_b,
-                              contacts.surface_velocity)
-    colliding = gravity_part - dot(v_rel, n) > threshold
+    v_rel = relative_velocity(bodies, rows, contacts.surface_velocity)
+    u = dot(v_rel, n)
+    colliding = gravity_part - u > threshold
     if not colliding.any():
         return None
     # A body in no colliding contact keeps share 1: its contacts' impulses are zero whatever
@@ -277,11 +282,11 @@ def _collide_together(bodies, contacts, gravity_part, threshold, rows):
     share = np.maximum(_count(bodies, a[colliding], b[colliding]), 1)
     k_normal, k_tangent = _masses(bodies, contacts, share)
     impulse, j, approach = collision_impulse(v_rel, n, gravity_part, contacts.restitution,
-                                             contacts.friction, k_normal, k_tangent, threshold)
-    hit = np.flatnonzero(j > 0)
+                                             contacts.friction, k_normal, k_tangent, threshold, u)
+    hit = (j > 0).nonzero()[0]
     if not len(hit):
         return None
-    apply_rows(bodies, n, impulse, rows)
+    apply_rows(bodies, impulse, rows)
     return hit, approach[hit], j[hit]
 
 
@@ -291,12 +296,12 @@ def _resting_target(contacts, h):
     return -np.maximum(contacts.gap, 0) / h
 
 
-def _collide(bodies, contacts, index, gravity_part, k_normal, k_tangent, threshold):
-    """Collision impulses for contacts ``index`` (a level of the sequential solver), applied;
-    None if none of them collides."""
+def _collide(bodies, contacts, index, rows, gravity_part, k_normal, k_tangent, threshold):
+    """Collision impulses for contacts ``index`` (a level of the sequential solver, whose
+    bodies are ``rows``, `_level_rows`), applied; None if none of them collides."""
     a, b, n = contacts.a[index], contacts.b[index], take_rows(contacts.normal, index)
     ra, rb = contacts.radius_a[index], contacts.radius_b[index]
-    v_rel = relative_velocity(bodies, a, b, n, ra, rb, take_rows(contacts.surface_velocity, index))
+    v_rel = relative_velocity(bodies, rows, take_rows(contacts.surface_velocity, index))
     impulse, j, approach = collision_impulse(
         v_rel, n, gravity_part[index], contacts.restitution[index], contacts.friction[index],
         k_normal[index], k_tangent[index], threshold)
@@ -308,19 +313,26 @@ def _collide(bodies, contacts, index, gravity_part, k_normal, k_tangent, thresho
     return index[hit], approach[hit], j[hit]
 
 
-def _apply_warm_start(bodies, contacts, normal_total, tangent_total):
-    """Apply the starting impulses, the friction part turned into the current tangent plane."""
+def _apply_warm_start(bodies, contacts, normal_total, tangent_total, rows):
+    """Apply the starting impulses, the friction part turned into the current tangent plane;
+    ``rows``: `_level_rows` of every contact."""
     n = contacts.normal
     tangent_total -= dot(tangent_total, n)[:, None] * n
     impulse = normal_total[:, None] * n + tangent_total
-    apply_impulse(bodies, contacts.a, contacts.b, n, contacts.radius_a, contacts.radius_b,
-                  impulse)
+    apply_rows(bodies, impulse, rows)
+
+
+def _in_columns(contacts):
+    """``contacts`` with its (K, 3) arrays stored column by column (`impulses.columns`), as
+    the solvers' arithmetic runs fastest."""
+    return replace(contacts, normal=columns(contacts.normal),
+                   surface_velocity=columns(contacts.surface_velocity))
 
 
 def _level_rows(bodies, contacts, index):
-    """`impulses.ImpulseRows` of contacts ``index``: the same in every resting pass."""
-    return impulse_rows(bodies, contacts.a[index], contacts.b[index], contacts.radius_a[index],
-                        contacts.radius_b[index])
+    """`impulses.ContactRows` of contacts ``index``: the same in every sweep and pass."""
+    return contact_rows(bodies, contacts.a[index], contacts.b[index], contacts.radius_a[index],
+                        contacts.radius_b[index], take_rows(contacts.normal, index))
 
 
 def _rest(bodies, contacts, index, target, k_normal, k_tangent, normal_total, tangent_total,
@@ -331,16 +343,16 @@ def _rest(bodies, contacts, index, target, k_normal, k_tangent, normal_total, ta
 
     Returns the largest change of relative velocity it caused (m/s), 0 for no contacts.
     """
-    a, b, n = contacts.a[index], contacts.b[index], take_rows(contacts.normal, index)
-    if len(a) == 0:
+    n = rows.normal
+    if len(n) == 0:
         return 0.0
-    ra, rb = contacts.radius_a[index], contacts.radius_b[index]
-    v_rel = relative_velocity(bodies, a, b, n, ra, rb, take_rows(contacts.surface_velocity, index))
+    v_rel = relative_velocity(bodies, rows, take_rows(contacts.surface_velocity, index))
     normal_part, tangent_part = normal_total[index], take_rows(tangent_total, index)
     impulse = contact_impulse(v_rel, n, target[index], contacts.friction[index],
                               k_normal[index], k_tangent[index], normal_part, tangent_part)
-    normal_total[index] = normal_part
-    tangent_total[index] = tangent_part
-    apply_rows(bodies, n, impulse, rows)
+    if not isinstance(index, slice):        # a slice's parts are views: already written
+        normal_total[index] = normal_part
+        tangent_total[index] = tangent_part
+    apply_rows(bodies, impulse, rows)
     size = np.sqrt(dot(impulse, impulse))
-    return float(np.max(size * k_tangent[index]))
+    return float((size * k_tangent[index]).max())

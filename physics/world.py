@@ -487,8 +487,8 @@ class World:
         # 3. resolve contacts: impulses turn v* into v_{n+1}
         pad = lambda array: np.concatenate([array, np.zeros((1,) + array.shape[1:],  # noqa: E731
                                                             self.dtype)])
-        bodies = SolverBodies(pad(v), pad(self.angular_velocity), pad(self.inverse_mass),
-                              pad(self.inverse_inertia))
+        bodies = SolverBodies(pad(np.concatenate([v, self.angular_velocity], axis=1)),
+                              pad(self.inverse_mass), pad(self.inverse_inertia))
         # What this step's gravity added to each contact's normal velocity (static contacts
         # only: two falling spheres both gain h g, which cancels in their relative velocity).
         gravity_part = np.where(contacts.static, h * dot(contacts.normal, self.gravity), 0)
@@ -511,7 +511,7 @@ class World:
             # point (point_solver.py), the spheres' with them, in one order.
             solved, collisions = self._solve_at_points(
                 bodies, sphere_point_contacts(contacts, self, keys), solid_contacts, h, work)
-        v_new, spin = bodies.velocity[:n], bodies.spin[:n]
+        v_new, spin = bodies.velocity[:n].copy(), bodies.spin[:n].copy()
 
         # 4. integrate positions (and orientations, with the same scheme)
         x_new = scheme.positions(x_old, v_old, v_new, h)
