@@ -154,20 +154,8 @@ def find_contacts(world, reach: float, counter=None, shapes=None) -> Contacts:
     plane_a = alive[body]
 
     shapes = world.shapes if shapes is None else shapes
-    touching = [shape_contacts(shape, x, r, alive, reach) for shape in shapes]
-    shape_index = np.concatenate([np.full(len(c.body), q, np.int64)
-                                  for q, c in enumerate(touching)] + [np.zeros(0, np.int64)])
-    join = lambda name, empty: np.concatenate(  # noqa: E731
-        [getattr(c, name) for c in touching] + [empty]).astype(empty.dtype, copy=False)
-    shape_a = join("body", np.zeros(0, np.int64))
-    slot = join("slot", np.zeros(0, np.int64))
-    order = np.lexsort((slot, shape_index, shape_a))
-    shape_a, slot, shape_index = shape_a[order], slot[order], shape_index[order]
-    shape_normal = join("normal", np.zeros((0, 3), dtype))[order]
-    shape_gap = join("gap", np.zeros(0, dtype))[order]
-    shape_e = np.maximum(world.restitution[shape_a], join("restitution", np.zeros(0, dtype))[order])
-    shape_mu = np.sqrt(world.friction[shape_a] * join("friction", np.zeros(0, dtype))[order])
-    shape_velocity = join("velocity", np.zeros((0, 3), dtype))[order]
+    (shape_a, shape_index, slot, shape_normal, shape_gap, shape_e, shape_mu,
+     shape_velocity) = _shape_contacts(world, shapes, alive, reach)
 
     i, j = find_pairs(x[alive], r[alive] + 0.5 * reach, CROWD_WINDOW, counter)
     a, b = alive[i], alive[j]
@@ -198,3 +186,29 @@ def find_contacts(world, reach: float, counter=None, shapes=None) -> Contacts:
         surface_velocity=np.concatenate([np.zeros((len(plane_a), 3), dtype), shape_velocity,
                                          np.zeros((len(a), 3), dtype)]),
     )
+
+
+def _shape_contacts(world, shapes, alive, reach):
+    """The sphere-shape contacts of `find_contacts`, ordered by (sphere, shape, slot): the
+    spheres (C,), shapes (C,), slots (C,), normals (C, 3), gaps (C,), mixed restitution and
+    friction (C,) and surface velocities (C, 3)."""
+    dtype = world.dtype
+    touching = [shape_contacts(shape, world.position, world.radius, alive, reach)
+                for shape in shapes]
+    shape_index = np.concatenate([np.full(len(c.body), q, np.int64)
+                                  for q, c in enumerate(touching)] + [np.zeros(0, np.int64)])
+    if len(shape_index) == 0:           # no shape, or none near: no bookkeeping to pay for
+        none, vectors = np.zeros(0, dtype), np.zeros((0, 3), dtype)
+        return shape_index, shape_index, shape_index, vectors, none, none, none, vectors
+    join = lambda name, empty: np.concatenate(  # noqa: E731
+        [getattr(c, name) for c in touching] + [empty]).astype(empty.dtype, copy=False)
+    shape_a = join("body", np.zeros(0, np.int64))
+    slot = join("slot", np.zeros(0, np.int64))
+    order = np.lexsort((slot, shape_index, shape_a))
+    shape_a, slot, shape_index = shape_a[order], slot[order], shape_index[order]
+    shape_normal = join("normal", np.zeros((0, 3), dtype))[order]
+    shape_gap = join("gap", np.zeros(0, dtype))[order]
+    shape_e = np.maximum(world.restitution[shape_a], join("restitution", np.zeros(0, dtype))[order])
+    shape_mu = np.sqrt(world.friction[shape_a] * join("friction", np.zeros(0, dtype))[order])
+    shape_velocity = join("velocity", np.zeros((0, 3), dtype))[order]
+    return shape_a, shape_index, slot, shape_normal, shape_gap, shape_e, shape_mu, shape_velocity

@@ -107,7 +107,10 @@ def bounce_off_statics(world, start, u, acceleration, spin, skip, h, landing=Non
     planes = len(world.plane_offset)
     dtype = start.dtype
     bounced = np.zeros(n, bool)
-    position, velocity, acceleration = start.copy(), u.copy(), acceleration.copy()
+    # Copied column by column (impulses.columns): the plane tests' (N, P, 3) products run
+    # fastest so.
+    position, velocity, acceleration = (np.array(part, order="F")
+                                        for part in (start, u, acceleration))
     elapsed = np.zeros(n, dtype)
     skip = skip.copy()
     none = (np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros((0, 3), dtype))
@@ -250,7 +253,7 @@ def _surface(world, shapes, static, position):
     normal[plane] = world.plane_normal[static[plane]]
     restitution[plane] = world.plane_restitution[static[plane]]
     friction[plane] = world.plane_friction[static[plane]]
-    for q in np.unique(static[~plane] - planes):
+    for q in (np.unique(static[~plane] - planes) if shapes else ()):
         rows = np.flatnonzero(static == planes + q)
         restitution[rows], friction[rows] = shapes[q].coefficients(position[rows])
         velocity[rows] = shapes[q].surface_velocity(position[rows])
