@@ -498,6 +498,9 @@ def lexicographic_order(keys: list) -> np.ndarray:
     key, two to three times faster on the 40,000 events a step of a 10,000-sphere pile
     records (and ``take`` rather than fancy indexing gathers the structured rows, which it
     does twenty times faster). Keys whose digits would not fit in 63 bits go to np.lexsort.
+    Where no two rows are equal on every key (no two events of a step are), any sort gives
+    the stable order: NumPy's default sort is tried first, about three times faster, and
+    kept unless two numbers tie.
     """
     if not len(keys[0]):
         return np.zeros(0, np.intp)
@@ -509,7 +512,11 @@ def lexicographic_order(keys: list) -> np.ndarray:
         if span >= 2 ** 63:
             return np.lexsort(keys[::-1])
         number = number * base + (key.astype(np.int64) - low)
-    return np.argsort(number, kind="stable")
+    order = np.argsort(number)
+    ordered = number.take(order)
+    if np.any(ordered[1:] == ordered[:-1]):     # a tie: only a stable sort keeps its order
+        return np.argsort(number, kind="stable")
+    return order
 
 
 def _set_uniform(program, name: str, value) -> None:
