@@ -34,12 +34,17 @@ from scene_model.geometry import dot
 class SolverBodies:
     """Velocities and inverse masses of N spheres plus the static world as row N.
 
+    Attributes
+    ----------
     motion : (N + 1, 6)
         Each body's velocity (m/s) then spin (rad/s); row N stays zero. One array, so that a
-        contact gathers what it needs of its bodies in one `take` and an impulse's two effects
-        go in one scattered add; stored column by column (`columns`). ``velocity`` and
-        ``spin`` are its halves, (N + 1, 3) views.
-    inverse_mass : (N + 1,) 1/kg, inverse_inertia : (N + 1,) 1/(kg m^2); 0 in row N.
+        contact gathers what it needs of its bodies in one `take` and an impulse's two
+        effects go in one scattered add; stored column by column (`columns`). ``velocity``
+        and ``spin`` are its halves, (N + 1, 3) views.
+    inverse_mass : (N + 1,)
+        1/kg; 0 in row N.
+    inverse_inertia : (N + 1,)
+        1/(kg m^2); 0 in row N.
     """
     motion: np.ndarray
     inverse_mass: np.ndarray
@@ -222,15 +227,23 @@ class ContactRows:
     """Where K contacts find their bodies in `SolverBodies.motion`, worked out once for a
     solver's passes over the same contacts.
 
-    a, b : (K,) int, the bodies;
-    radius_a, radius_b : (K, 3) m, the lever arms r_a and r_b, one column each for x, y, z
-        (so that r w is a product of equal shapes, NumPy's fastest);
-    normal : (K, 3), the unit normals n, stored column by column (`columns`), and
-    normal_as_p, normal_as_q : (K, 6), their `cross_columns` for n x q and p x n;
-    flat : (12 K,) int, where `apply_rows` adds: the elements of the rows in the flat view of
-        motion's transpose, (6, N + 1): a's velocity x, y, z and spin x, y, z, then b's;
-    scale : (12, K), what P and n x P are multiplied by for them: 1/m_a (three rows),
-        -r_a / I_a (three), -1/m_b, -r_b / I_b.
+    Attributes
+    ----------
+    a, b : (K,) int
+        The bodies.
+    radius_a, radius_b : (K, 3)
+        The lever arms r_a and r_b (m), one column each for x, y and z, so that r w is a
+        product of equal shapes, NumPy's fastest.
+    normal : (K, 3)
+        The unit normals n, stored column by column (`columns`).
+    normal_as_p, normal_as_q : (K, 6)
+        Their `cross_columns`, for n x q and p x n.
+    flat : (12 K,) int
+        Where `apply_rows` adds: the rows' elements in the flat view of motion's transpose,
+        (6, N + 1): a's velocity x, y, z and spin x, y, z, then b's.
+    scale : (12, K)
+        What P and n x P are multiplied by for them: 1/m_a (three rows), -r_a / I_a
+        (three), -1/m_b, -r_b / I_b.
     """
     a: np.ndarray
     b: np.ndarray
