@@ -299,7 +299,7 @@ def _resting_target(contacts, h):
 def _collide(bodies, contacts, index, rows, gravity_part, k_normal, k_tangent, threshold):
     """Collision impulses for contacts ``index`` (a level of the sequential solver, whose
     bodies are ``rows``, `_level_rows`), applied; None if none of them collides."""
-    a, b, n = contacts.a[index], contacts.b[index], take_rows(contacts.normal, index)
+    a, b, n = contacts.a[index], contacts.b[index], rows.normal
     ra, rb = contacts.radius_a[index], contacts.radius_b[index]
     v_rel = relative_velocity(bodies, rows, take_rows(contacts.surface_velocity, index))
     impulse, j, approach = collision_impulse(

@@ -487,8 +487,9 @@ class World:
         # 3. resolve contacts: impulses turn v* into v_{n+1}
         pad = lambda array: np.concatenate([array, np.zeros((1,) + array.shape[1:],  # noqa: E731
                                                             self.dtype)])
-        bodies = SolverBodies(pad(np.concatenate([v, self.angular_velocity], axis=1)),
-                              pad(self.inverse_mass), pad(self.inverse_inertia))
+        motion = np.zeros((n + 1, 6), self.dtype, order="F")     # row n: the static world
+        motion[:n, :3], motion[:n, 3:] = v, self.angular_velocity
+        bodies = SolverBodies(motion, pad(self.inverse_mass), pad(self.inverse_inertia))
         # What this step's gravity added to each contact's normal velocity (static contacts
         # only: two falling spheres both gain h g, which cancels in their relative velocity).
         gravity_part = np.where(contacts.static, h * dot(contacts.normal, self.gravity), 0)
