@@ -81,6 +81,7 @@ from physics.errors import PhysicsError
 from physics.events import EVENT_DTYPE
 from scene_model.shapes import primitives
 
+from . import buffer_texture
 from .context import gl_context
 from .dialects import GLSL
 from .library import fill_template
@@ -93,6 +94,8 @@ MAX_SHAPES = 32
 EVENT_CAPACITY = 1 << 16 # events held on the GPU (at least; 256 per body for large worlds)
 DRAIN_EVERY = 4          # steps between read-backs of the event buffer (not of the state)
 GROUP = 64               # local_size_x of the shader
+# texture units of the buffer textures read with TEXEL_READS (above the raster passes')
+CONTACT_TEXELS, MOTION_TEXELS, BODY_TEXELS, ENTRY_TEXELS = 16, 17, 18, 19
 
 STAGES = dict(begin=0, collide_count=1, collide_apply=2, warm_start=3, rest=4, positions=5,
               finish=6, grid_count=7, grid_scan=8, grid_scan_blocks=9, grid_scatter=10,
@@ -131,16 +134,21 @@ STORAGE_BUFFERS = 11     # bindings 0 .. 10 of the shader
 PARAMETERS_BINDING = 0   # the uniform block of the shapes' numbers (physics_shapes.py)
 
 
-def shader_source(shapes: str = "", stage: str = "begin") -> str:
+def shader_source(shapes: str = "", stage: str = "begin", texel_reads: bool = False) -> str:
     """The compute shader of one stage (a name of STAGES): glsl/physics_step.glsl after its
     version, sizes, the constants of physics/colliders.py and the STAGE, with ``shapes``
-    (`physics_shapes.shape_code`) written in.
+    (`physics_shapes.shape_code`) written in; with ``texel_reads``, the solver reads contacts
+    and velocities through buffer textures (`buffer_texture`) at units CONTACT_TEXELS and
+    MOTION_TEXELS.
     """
     x, y, z = (GLSL.literal(c) for c in colliders.FALLBACK_NORMAL)
     a, b, c = (GLSL.literal(c) for c in colliders.OFF_RIDGE)
     head = (f"#version 430\n#define STAGE {STAGES[stage]}  // {stage}\n"
             f"#define MAX_CONTACTS {MAX_CONTACTS}\n"
             f"#define MAX_ITERATIONS {MAX_ITERATIONS}\n#define MAX_PLANES {MAX_PLANES}\n"
+            f"#define TEXEL_READS {int(texel_reads)}\n#define CONTACT_TEXELS {CONTACT_TEXELS}\n"
+            f"#define MOTION_TEXELS {MOTION_TEXELS}\n#define BODY_TEXELS {BODY_TEXELS}\n"
+            f"#define ENTRY_TEXELS {ENTRY_TEXELS}\n"
             "// physics/colliders.py\n"
             f"#define FALLBACK_NORMAL vec3({x}, {y}, {z})\n"
             f"#define MAX_SHAPE_CONTACTS {colliders.MAX_SHAPE_CONTACTS}\n"
@@ -177,10 +185,14 @@ class GpuStepper:
         False (default): spheres look for each other in the grid of glsl/physics_grid.glsl.
         True: every sphere tests every other, the textbook O(N^2) loop the grid replaces; the
         same pairs, so the same steps (tests compare the two).
+    texel_reads : bool, optional
+        Whether the solver reads contacts and velocities through buffer textures
+        (`buffer_texture`: the same numbers, faster on llvmpipe) rather than as storage
+        buffers. Default: where the context and the world's size allow it.
     """
 
     def __init__(self, world, ctx=None, shape_nodes=None, shape_surfaces=None,
-                 all_pairs=False):
+                 all_pairs=False, texel_reads=None):
         check_world(world, shape_nodes)
         self.world = world
         self.ctx = ctx or gl_context()
@@ -203,8 +215,15 @@ class GpuStepper:
             if storage < STORAGE_BUFFERS:
                 raise PhysicsError(f"the gpu physics step needs {STORAGE_BUFFERS} storage "
                                    f"buffers in a compute shader; this GPU allows {storage}")
-            self.programs = {stage: self.ctx.compute_shader(shader_source(shapes.source, stage))
-                             for stage in STAGES}
+            contact_texels = 2 * n * MAX_CONTACTS * CONTACT_BYTES // buffer_texture.TEXEL_BYTES
+            possible = (buffer_texture.available(self.ctx)
+                        and contact_texels <= buffer_texture.max_texels(self.ctx))
+            self.texel_reads = possible if texel_reads is None else bool(texel_reads)
+            if self.texel_reads and not possible:
+                raise PhysicsError("texel_reads: this context cannot make buffer textures of "
+                                   f"{contact_texels} texels")
+            self.programs = {stage: self.ctx.compute_shader(
+                shader_source(shapes.source, stage, self.texel_reads)) for stage in STAGES}
             self.bodies = self.ctx.buffer(upload_bodies(world).tobytes())
             self.motion = self.ctx.buffer(reserve=2 * n * MOTION_BYTES)
             self.contacts = self.ctx.buffer(reserve=2 * n * MAX_CONTACTS * CONTACT_BYTES)
@@ -224,6 +243,12 @@ class GpuStepper:
             # again), starts, then 2 N ints (glsl/physics_step.glsl, Order)
             self.order = self.ctx.buffer(bytes(4 * (2 * (MAX_CONTACTS + 1) + 2 * n)))
             self.parameters = self.ctx.buffer(shapes.parameters.tobytes())
+            # the solver's views of the contacts and the Motion rows (TEXEL_READS)
+            self.texels = ({CONTACT_TEXELS: buffer_texture.BufferTexture(self.contacts),
+                            MOTION_TEXELS: buffer_texture.BufferTexture(self.motion),
+                            BODY_TEXELS: buffer_texture.BufferTexture(self.bodies),
+                            ENTRY_TEXELS: buffer_texture.BufferTexture(self.grid_entries)}
+                           if self.texel_reads else {})
             self._set_constants()         # uniforms are set on the current context
 
     def __call__(self, steps: int) -> None:
@@ -249,6 +274,8 @@ class GpuStepper:
                 program.release()
             for name in self.BUFFERS:
                 getattr(self, name).release()
+            for texture in self.texels.values():
+                texture.release()
 
     def set_gravity(self, gravity) -> None:
         """Use ``gravity`` (3,) m/s^2 from the next step on (the world's, changed by a slider).
@@ -294,6 +321,8 @@ class GpuStepper:
                                         self.grid_entries, self.order)):
             buffer.bind_to_storage_buffer(index)
         self.parameters.bind_to_uniform_block(PARAMETERS_BINDING)
+        for unit, texture in self.texels.items():
+            texture.use(unit)
         self._dispatch("grid_count")              # the broad phase: sort the bodies by cell
         self._dispatch("grid_scan", invocations=self.table_size // self.scan_block)
         self._dispatch("grid_scan_blocks", invocations=1)

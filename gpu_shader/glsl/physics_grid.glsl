@@ -130,7 +130,7 @@ void grid_scatter(int i) {
 // of their slots, so that the 8 invocations llvmpipe runs in step (and a GPU's warp) walk
 // neighbouring cells, read the same entries, and meet about as many bodies each. Which body an
 // invocation takes changes no result: each writes only its own body's rows.
-int walk_order(int k) { return grid_entries[k].w; }
+int walk_order(int k) { return entry_at(k).w; }
 
 // A walk over the bodies in the cells under a box (grid_walk), one body per next_body. It goes
 // row by row (a row: the box's cells along x at one y and z), and a row's cells fill
@@ -174,7 +174,7 @@ bool next_body(inout GridWalk walk, out int j) {
             if (walk.every_body) {
                 j = k;
             } else {
-                ivec4 entry = grid_entries[k];
+                ivec4 entry = entry_at(k);
                 // another cell that shares one of the run's slots is skipped
                 if (entry.yz != walk.row || entry.x < walk.first.x || entry.x > walk.last.x) {
                     continue;

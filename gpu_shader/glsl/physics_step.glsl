@@ -190,6 +190,73 @@ uniform int u_table_size;    // slots of the grid's hash table, a power of two
 uniform int u_scan_block;    // slots per block of the scan, a power of two
 uniform int u_all_pairs;     // 1: every walk tests every body (the textbook loop)
 
+// --- reads through buffer textures ---------------------------------------------------------
+//
+// The solver's dispatches and the grid's walks read a few dozen words per contact or per body
+// met, at scattered places, and llvmpipe loads a storage buffer one word and one invocation at
+// a time (a loop over the 8 invocations it runs in step, for each word). A buffer texture over
+// the same buffer reads 16 bytes for all 8 in one gather: with TEXEL_READS (GpuStepper makes
+// the textures, RGBA32I views of the buffers, at the units named below) those reads go through
+// them, about 3 times as fast per word on llvmpipe (docs/performance.md; the same on a GPU).
+// The words come as integers and are turned into floats bit for bit (intBitsToFloat), so the
+// numbers are those the storage buffer holds. Writes still go to the storage buffers; each
+// dispatch's memory barrier makes them visible to the next one's texel fetches, and no
+// dispatch uses a word fetched through a texture that another of its invocations writes
+// (begin_step and finish_step fetch other bodies' texel 9 for one flag while each writes
+// another flag of its own body's).
+#if TEXEL_READS
+layout(binding = CONTACT_TEXELS) uniform isamplerBuffer contact_texels;   // 5 per Contact
+layout(binding = MOTION_TEXELS) uniform isamplerBuffer motion_texels;     // 2 per Motion
+layout(binding = BODY_TEXELS) uniform isamplerBuffer body_texels;         // 11 per Body
+layout(binding = ENTRY_TEXELS) uniform isamplerBuffer entry_texels;       // 1 per grid entry
+
+vec4 contact_texel(int k) { return intBitsToFloat(texelFetch(contact_texels, k)); }
+
+Contact contact_at(int index) {
+    int t = 5 * index;
+    ivec4 words = texelFetch(contact_texels, t + 3);      // other, slot, normal_total, gravity_part
+    return Contact(contact_texel(t), contact_texel(t + 1), contact_texel(t + 2), words.x, words.y,
+                   intBitsToFloat(words.z), intBitsToFloat(words.w), contact_texel(t + 4).xy,
+                   vec2(0.0));
+}
+
+Motion motion_at(int index) {
+    return Motion(intBitsToFloat(texelFetch(motion_texels, 2 * index)),
+                  intBitsToFloat(texelFetch(motion_texels, 2 * index + 1)));
+}
+
+// Texel t of body j: 0 position, 4 start_position, 7 end_position, 8 (radius, inverse_mass,
+// inverse_inertia, restitution), 9 (friction, in_world, start_in_world, colliding), 10
+// (contact_count[2], landing_count, grid_rank).
+ivec4 body_texel(int j, int t) { return texelFetch(body_texels, 11 * j + t); }
+vec3 position_of(int j) { return intBitsToFloat(body_texel(j, 0).xyz); }
+vec3 start_position_of(int j) { return intBitsToFloat(body_texel(j, 4).xyz); }
+vec3 end_position_of(int j) { return intBitsToFloat(body_texel(j, 7).xyz); }
+vec4 mass_row_of(int j) { return intBitsToFloat(body_texel(j, 8)); }
+ivec4 flags_of(int j) { return body_texel(j, 9); }
+ivec2 contact_counts_of(int j) { return body_texel(j, 10).xy; }
+
+ivec4 entry_at(int k) { return texelFetch(entry_texels, k); }
+#else
+Contact contact_at(int index) { return contacts[index]; }
+Motion motion_at(int index) { return motion[index]; }
+vec3 position_of(int j) { return bodies[j].position.xyz; }
+vec3 start_position_of(int j) { return bodies[j].start_position.xyz; }
+vec3 end_position_of(int j) { return bodies[j].end_position.xyz; }
+vec4 mass_row_of(int j) {
+    return vec4(bodies[j].radius, bodies[j].inverse_mass, bodies[j].inverse_inertia,
+                bodies[j].restitution);
+}
+ivec4 flags_of(int j) {
+    return ivec4(floatBitsToInt(bodies[j].friction), bodies[j].in_world,
+                 bodies[j].start_in_world, bodies[j].colliding);
+}
+ivec2 contact_counts_of(int j) {
+    return ivec2(bodies[j].contact_count[0], bodies[j].contact_count[1]);
+}
+ivec4 entry_at(int k) { return grid_entries[k]; }
+#endif
+
 // --- the static shapes: the renderer's SDF code for each (generated) ------------------------
 //
 // Written in by gpu_shader/physics_shapes.py for the shapes of this world: for each shape q,
@@ -266,12 +333,16 @@ void contact_bodies(int i, int other, out int a, out int b) {
 }
 
 vec3 velocity_of(int body) {
-    return body < 0 ? vec3(0.0) : motion[u_read * u_count + body].velocity.xyz;
+    return body < 0 ? vec3(0.0) : motion_at(u_read * u_count + body).velocity.xyz;
 }
-vec3 spin_of(int body) { return body < 0 ? vec3(0.0) : motion[u_read * u_count + body].spin.xyz; }
-float radius_of(int body) { return body < 0 ? 0.0 : bodies[body].radius; }
-float inverse_mass_of(int body) { return body < 0 ? 0.0 : bodies[body].inverse_mass; }
-float inverse_inertia_of(int body) { return body < 0 ? 0.0 : bodies[body].inverse_inertia; }
+vec3 spin_of(int body) {
+    return body < 0 ? vec3(0.0) : motion_at(u_read * u_count + body).spin.xyz;
+}
+float radius_of(int body) { return body < 0 ? 0.0 : mass_row_of(body).x; }
+float inverse_mass_of(int body) { return body < 0 ? 0.0 : mass_row_of(body).y; }
+float inverse_inertia_of(int body) { return body < 0 ? 0.0 : mass_row_of(body).z; }
+float friction_of(int body) { return intBitsToFloat(flags_of(body).x); }
+int contact_count_of(int body) { return contact_counts_of(body)[u_list]; }
 
 // --- the formulas of physics/impulses.py ---------------------------------------------------
 
@@ -291,15 +362,16 @@ struct Other {
 // which has no velocity, spin or mass). `contact` is the contact's surface_velocity.
 Other other_body(int other, vec4 contact) {
     if (other < 0) return Other(vec3(0.0), vec3(0.0), 0.0, vec2(0.0));
-    Motion row = motion[u_read * u_count + other];
+    Motion row = motion_at(u_read * u_count + other);
     return Other(row.velocity.xyz, row.spin.xyz, contact.w, vec2(row.velocity.w, row.spin.w));
 }
 
 // A body's mass terms under mass splitting (solvers._masses): its inverse mass times `share`,
 // and r^2 times its inverse inertia times `share`, in the order the CPU multiplies them.
 vec2 shared_masses(int body, float share) {
-    float ii = bodies[body].inverse_inertia * share, r = bodies[body].radius;
-    return vec2(bodies[body].inverse_mass * share, r * r * ii);
+    vec4 row = mass_row_of(body);
+    float ii = row.z * share, r = row.x;
+    return vec2(row.y * share, r * r * ii);
 }
 
 // v_rel of a's contact point relative to b's: v_a - v_b - (r_a w_a + r_b w_b) x n, less the
@@ -375,7 +447,8 @@ void apply_impulse(bool first, vec3 n, vec3 impulse, vec2 own, inout vec3 veloci
 
 // Body i's inverse mass and radius times inverse inertia, as apply_impulse takes them.
 vec2 impulse_masses(int i) {
-    return vec2(bodies[i].inverse_mass, bodies[i].radius * bodies[i].inverse_inertia);
+    vec4 row = mass_row_of(i);
+    return vec2(row.y, row.x * row.z);
 }
 
 // Pair coefficients, mixed as Box2D does: max of restitutions, sqrt of the frictions' product
@@ -387,8 +460,7 @@ vec2 static_coefficients(int i, float restitution, float friction) {
 // Two spheres, in the canonical orientation (a the lower index):
 vec2 sphere_coefficients(int i, int other) {
     int a = min(i, other), b = max(i, other);
-    return vec2(max(bodies[a].restitution, bodies[b].restitution),
-                sqrt(bodies[a].friction * bodies[b].friction));
+    return vec2(max(mass_row_of(a).w, mass_row_of(b).w), sqrt(friction_of(a) * friction_of(b)));
 }
 
 // --- static shapes: the functions of physics/colliders.py ------------------------------------
@@ -531,12 +603,12 @@ float first_shape_hit(int shape, vec3 start, vec3 u, vec3 acceleration, float ra
 // normal from b to a, contacts.sphere_sphere_normals); its gap is normal_gap.w (m).
 Contact sphere_contact(int i, int j) {
     int a = min(i, j), b = max(i, j);
-    vec3 d = bodies[a].position.xyz - bodies[b].position.xyz;
+    vec3 d = position_of(a) - position_of(b);
     float distance = sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
     // coincident centres: the fixed fallback normal +y (contacts.FALLBACK_NORMAL)
     vec3 n = distance == 0.0 ? FALLBACK_NORMAL : d / distance;
-    float gap = distance - (bodies[a].radius + bodies[b].radius);
-    return Contact(vec4(n, gap), vec4(0.0), vec4(vec3(0.0), bodies[j].radius), j, 0, 0.0, 0.0,
+    float gap = distance - (mass_row_of(a).x + mass_row_of(b).x);
+    return Contact(vec4(n, gap), vec4(0.0), vec4(vec3(0.0), mass_row_of(j).x), j, 0, 0.0, 0.0,
                    sphere_coefficients(i, j), vec2(0.0));
 }
 
@@ -545,10 +617,10 @@ Contact sphere_contact(int i, int j) {
 // slop apart) while they approach, and when, as a fraction t of the step (t may be >= 1).
 bool sweep_hit(int i, int j, out float t) {
     int a = min(i, j), b = max(i, j);
-    vec3 sa = bodies[a].start_position.xyz, sb = bodies[b].start_position.xyz;
+    vec3 sa = start_position_of(a), sb = start_position_of(b);
     vec3 p = sa - sb;
-    vec3 q = (bodies[a].end_position.xyz - sa) - (bodies[b].end_position.xyz - sb);
-    float reach = bodies[a].radius + bodies[b].radius;
+    vec3 q = (end_position_of(a) - sa) - (end_position_of(b) - sb);
+    float reach = mass_row_of(a).x + mass_row_of(b).x;
     // |p + t q|^2 = R^2: the first root, as c / (-b + sqrt(b^2 - a c))
     float qa = dot3(q, q), qb = dot3(p, q), qc = dot3(p, p) - reach * reach;
     float discriminant = qb * qb - qa * qc;
@@ -607,7 +679,7 @@ void begin_step(int i) {
         GridWalk walk = grid_walk(x - reach, x + reach);
         int j;
         while (next_body(walk, j)) {
-            if (j == i || bodies[j].in_world == 0) continue;
+            if (j == i || flags_of(j).y == 0) continue;
             if (!(sphere_contact(i, j).normal_gap.w <= u_slop)) continue;
             if (found == room) {                                   // the list would overflow
                 atomicOr(counters[COUNT_OVERFLOW], 1u);
@@ -630,12 +702,14 @@ void begin_step(int i) {
     }
     // warm_start: the same contact in last step's list (the same pair, or the same plane, or
     // the same shape and slot: solvers.contact_keys) hands over its accumulated impulses
+    // (last step's list read through contact_at: this dispatch writes only this step's)
     for (int c = 0; c < count; c++) {
+        int other = contacts[start + c].other, slot = contacts[start + c].slot;
         for (int o = 0; o < old_count; o++) {
-            if (contacts[old + o].other == contacts[start + c].other
-                    && contacts[old + o].slot == contacts[start + c].slot) {
-                contacts[start + c].normal_total = contacts[old + o].normal_total;
-                contacts[start + c].tangent_total = contacts[old + o].tangent_total;
+            Contact before = contact_at(old + o);
+            if (before.other == other && before.slot == slot) {
+                contacts[start + c].normal_total = before.normal_total;
+                contacts[start + c].tangent_total = before.tangent_total;
                 break;
             }
         }
@@ -660,11 +734,11 @@ void collide_count(int i) {
     vec3 v_i = velocity_of(i), w_i = spin_of(i);
     motion[(1 - u_read) * u_count + i] = Motion(vec4(v_i, 0.0), vec4(w_i, 0.0));
     if (u_pass > 0 && counters[COUNT_LISTED + u_pass - 1] == 0u) return;      // loop ended
-    int start = list_start(i, u_list), count = bodies[i].contact_count[u_list];
+    int start = list_start(i, u_list), count = contact_count_of(i);
     float r_i = radius_of(i);
     int colliding = 0;
     for (int c = 0; c < count; c++) {
-        Contact k = contacts[start + c];
+        Contact k = contact_at(start + c);
         Other o = other_body(k.other, k.surface_velocity);
         vec3 v_rel = relative_velocity(is_a(i, k.other), v_i, w_i, r_i, o, k.normal_gap.xyz,
                                        k.surface_velocity.xyz);
@@ -688,10 +762,10 @@ void collide_apply(int i) {
     vec3 v = velocity_of(i), w = spin_of(i);
     vec3 v_i = v, w_i = w;                        // read once for every contact
     float r_i = radius_of(i);
-    vec2 own = shared_masses(i, float(bodies[i].colliding)), applied = impulse_masses(i);
-    int start = list_start(i, u_list), count = bodies[i].contact_count[u_list];
+    vec2 own = shared_masses(i, float(flags_of(i).w)), applied = impulse_masses(i);
+    int start = list_start(i, u_list), count = contact_count_of(i);
     for (int c = 0; c < count; c++) {
-        Contact k = contacts[start + c];
+        Contact k = contact_at(start + c);
         bool first = is_a(i, k.other);
         Other o = other_body(k.other, k.surface_velocity);
         vec3 n = k.normal_gap.xyz;
@@ -718,9 +792,9 @@ void collide_apply(int i) {
 void warm_start_apply(int i) {
     vec3 v = velocity_of(i), w = spin_of(i);
     vec2 applied = impulse_masses(i);
-    int start = list_start(i, u_list), count = bodies[i].contact_count[u_list];
+    int start = list_start(i, u_list), count = contact_count_of(i);
     for (int c = 0; c < count; c++) {
-        Contact k = contacts[start + c];
+        Contact k = contact_at(start + c);
         vec3 n = k.normal_gap.xyz;
         vec3 tangent = k.tangent_total.xyz - dot3(k.tangent_total.xyz, n) * n;
         contacts[start + c].tangent_total.xyz = tangent;
@@ -733,7 +807,7 @@ void warm_start_apply(int i) {
 // solvers._rest over every contact, mass split among all of a body's contacts; stops (copies
 // through) once the previous pass changed no velocity by more than SETTLED.
 void rest_pass(int i) {
-    Motion row = motion[u_read * u_count + i];
+    Motion row = motion_at(u_read * u_count + i);
     vec3 v = row.velocity.xyz, w = row.spin.xyz;
     vec3 v_i = v, w_i = w;                        // read once for every contact
     vec2 own = vec2(row.velocity.w, row.spin.w);  // warm_start_apply's shared_masses
@@ -742,10 +816,10 @@ void rest_pass(int i) {
     if (running) {
         float r_i = radius_of(i);
         vec2 applied = impulse_masses(i);
-        int start = list_start(i, u_list), count = bodies[i].contact_count[u_list];
+        int start = list_start(i, u_list), count = contact_count_of(i);
         float change = 0.0;
         for (int c = 0; c < count; c++) {                 // a's contacts first, then b's
-            Contact k = contacts[start + c];
+            Contact k = contact_at(start + c);
             bool first = is_a(i, k.other);
             Other o = other_body(k.other, k.surface_velocity);
             vec3 n = k.normal_gap.xyz;
@@ -834,7 +908,7 @@ int first_wall_hit(int i, vec3 position, vec3 velocity, vec3 acceleration, float
     vec3 end_velocity = velocity + remaining * acceleration;
     float travel = remaining * max(sqrt(dot3(velocity, velocity)),
                                    sqrt(dot3(end_velocity, end_velocity)));
-    int start = list_start(i, u_list), count = bodies[i].contact_count[u_list];
+    int start = list_start(i, u_list), count = contact_count_of(i);
     int landing = bodies[i].landing_count;
     for (int q = 0; q < u_shapes; q++) {
         float time = -1.0;
@@ -1017,7 +1091,7 @@ void finish_step(int i) {
         int j;
         while (next_body(walk, j)) {
             float t;
-            if (j == i || bodies[j].start_in_world == 0 || !sweep_hit(i, j, t)) continue;
+            if (j == i || flags_of(j).z == 0 || !sweep_hit(i, j, t)) continue;
             if (t < 1.0 && (!hit || t < first)) {     // the minimum, whatever the order met
                 hit = true;
                 first = t;
