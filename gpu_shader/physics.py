@@ -137,9 +137,9 @@ PARAMETERS_BINDING = 0   # the uniform block of the shapes' numbers (physics_sha
 def shader_source(shapes: str = "", stage: str = "begin", texel_reads: bool = False) -> str:
     """The compute shader of one stage (a name of STAGES): glsl/physics_step.glsl after its
     version, sizes, the constants of physics/colliders.py and the STAGE, with ``shapes``
-    (`physics_shapes.shape_code`) written in; with ``texel_reads``, the solver reads contacts
-    and velocities through buffer textures (`buffer_texture`) at units CONTACT_TEXELS and
-    MOTION_TEXELS.
+    (`physics_shapes.shape_code`) written in; with ``texel_reads``, the step reads contacts,
+    velocities, bodies and grid entries through buffer textures (`buffer_texture`) at units
+    CONTACT_TEXELS, MOTION_TEXELS, BODY_TEXELS and ENTRY_TEXELS.
     """
     x, y, z = (GLSL.literal(c) for c in colliders.FALLBACK_NORMAL)
     a, b, c = (GLSL.literal(c) for c in colliders.OFF_RIDGE)
@@ -186,9 +186,10 @@ class GpuStepper:
         True: every sphere tests every other, the textbook O(N^2) loop the grid replaces; the
         same pairs, so the same steps (tests compare the two).
     texel_reads : bool, optional
-        Whether the solver reads contacts and velocities through buffer textures
-        (`buffer_texture`: the same numbers, faster on llvmpipe) rather than as storage
-        buffers. Default: where the context and the world's size allow it.
+        Whether the step reads contacts, velocities, bodies and grid entries through buffer
+        textures (`buffer_texture`: the same numbers, a step in about 30% less time on
+        llvmpipe) rather than as storage buffers. Default: where the context and the world's
+        size allow it (the contact lists, the largest, fit GL_MAX_TEXTURE_BUFFER_SIZE).
     """
 
     def __init__(self, world, ctx=None, shape_nodes=None, shape_surfaces=None,
@@ -243,7 +244,7 @@ class GpuStepper:
             # again), starts, then 2 N ints (glsl/physics_step.glsl, Order)
             self.order = self.ctx.buffer(bytes(4 * (2 * (MAX_CONTACTS + 1) + 2 * n)))
             self.parameters = self.ctx.buffer(shapes.parameters.tobytes())
-            # the solver's views of the contacts and the Motion rows (TEXEL_READS)
+            # the views the step reads through (TEXEL_READS), by texture unit
             self.texels = ({CONTACT_TEXELS: buffer_texture.BufferTexture(self.contacts),
                             MOTION_TEXELS: buffer_texture.BufferTexture(self.motion),
                             BODY_TEXELS: buffer_texture.BufferTexture(self.bodies),

@@ -197,13 +197,14 @@ uniform int u_all_pairs;     // 1: every walk tests every body (the textbook loo
 // a time (a loop over the 8 invocations it runs in step, for each word). A buffer texture over
 // the same buffer reads 16 bytes for all 8 in one gather: with TEXEL_READS (GpuStepper makes
 // the textures, RGBA32I views of the buffers, at the units named below) those reads go through
-// them, about 3 times as fast per word on llvmpipe (docs/performance.md; the same on a GPU).
-// The words come as integers and are turned into floats bit for bit (intBitsToFloat), so the
-// numbers are those the storage buffer holds. Writes still go to the storage buffers; each
+// them, about 3 times as fast per word on llvmpipe (docs/performance.md). The words come as
+// integers and are turned into floats bit for bit (intBitsToFloat), so the numbers are those
+// the storage buffer holds, on any GPU. Writes still go to the storage buffers; each
 // dispatch's memory barrier makes them visible to the next one's texel fetches, and no
 // dispatch uses a word fetched through a texture that another of its invocations writes
 // (begin_step and finish_step fetch other bodies' texel 9 for one flag while each writes
-// another flag of its own body's).
+// another flag of its own body's). The later stages' loops over a body's own contacts still
+// read the storage buffer: through the texture they saved no time three rounds could see.
 #if TEXEL_READS
 layout(binding = CONTACT_TEXELS) uniform isamplerBuffer contact_texels;   // 5 per Contact
 layout(binding = MOTION_TEXELS) uniform isamplerBuffer motion_texels;     // 2 per Motion
