@@ -114,10 +114,9 @@ class BufferTexture:
         gl.glGenTextures(1, ctypes.byref(name))
         self.glo = name.value
         self.buffer = buffer
-        with _unit_kept(gl):
-            gl.glBindTexture(GL_TEXTURE_BUFFER, self.glo)
-            gl.glTexBuffer(GL_TEXTURE_BUFFER, GL_RGBA32I, ctypes.c_uint(buffer.glo))
-            gl.glBindTexture(GL_TEXTURE_BUFFER, 0)
+        gl.glBindTexture(GL_TEXTURE_BUFFER, self.glo)          # on the active unit, briefly
+        gl.glTexBuffer(GL_TEXTURE_BUFFER, GL_RGBA32I, ctypes.c_uint(buffer.glo))
+        gl.glBindTexture(GL_TEXTURE_BUFFER, 0)
 
     def use(self, unit: int) -> None:
         """Bind it to texture unit ``unit``, leaving the active unit as it was (moderngl

@@ -341,7 +341,6 @@ vec3 spin_of(int body) {
 }
 float radius_of(int body) { return body < 0 ? 0.0 : mass_row_of(body).x; }
 float inverse_mass_of(int body) { return body < 0 ? 0.0 : mass_row_of(body).y; }
-float inverse_inertia_of(int body) { return body < 0 ? 0.0 : mass_row_of(body).z; }
 float friction_of(int body) { return intBitsToFloat(flags_of(body).x); }
 int contact_count_of(int body) { return contact_counts_of(body)[u_list]; }
 

@@ -25,6 +25,7 @@ from gpu_shader.context import gl_context, is_software
 from marchlab.simulation import simulate
 import physics
 from required_backends import need_backend
+from sphere_piles import box_pile
 
 SPHERES = 500
 SECONDS = 0.5
@@ -35,25 +36,11 @@ def _needs_gpu():
     need_backend("gpu")
 
 
-def box_pile(count: int = SPHERES, height: float = 1.5, seed: int = 0) -> physics.World:
-    """``count`` spheres of radii 4 to 8 cm thrown with random velocities into a 1.2 m square
-    box (a floor and four walls) from up to ``height`` (m); float32, simultaneous solver."""
-    rng = np.random.default_rng(seed)
-    world = physics.World(solver="simultaneous", dtype="float32", seed=seed)
-    world.add_plane((0, 1, 0), 0, friction=0.4)
-    for normal in [(1, 0, 0), (-1, 0, 0), (0, 0, 1), (0, 0, -1)]:
-        world.add_plane(normal, -0.6, friction=0.4)
-    centre = rng.uniform((-0.5, 0.1, -0.5), (0.5, height, 0.5), (count, 3))
-    world.add_spheres(centre, velocities=rng.normal(0, 1, (count, 3)),
-                      radius=rng.uniform(0.04, 0.08, count), restitution=0.3, friction=0.4)
-    return world
-
-
 @functools.cache
 def pile_runs():
     """(GPU, CPU float32) trajectories of `box_pile` over SECONDS, every step recorded."""
-    gpu = simulate(box_pile(), SECONDS, record_every=1, backend="gpu")
-    cpu = physics.simulate(box_pile(), SECONDS, record_every=1)
+    gpu = simulate(box_pile(SPHERES), SECONDS, record_every=1, backend="gpu")
+    cpu = physics.simulate(box_pile(SPHERES), SECONDS, record_every=1)
     return gpu, cpu
 
 
@@ -88,7 +75,7 @@ def test_pile_of_500_has_the_contacts_of_a_pile():
     # so that the comparison above is about contacts, not free flight: by the end most spheres
     # touch the floor, a wall or another sphere
     gpu, cpu = pile_runs()
-    world = box_pile()
+    world = box_pile(SPHERES)
     world.position = cpu.positions[-1].astype(np.float32)
     contacts = physics.contacts.find_contacts(world, world.slop)
     pairs = contacts.b < world.count

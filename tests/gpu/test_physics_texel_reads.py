@@ -17,6 +17,7 @@ import physics
 from marchlab.colliders import primitive_coefficients, shape_objects
 from marchlab.simulation import build_world
 from scene_model.builder import Body, Material, PhysicsSettings, Scene, box, plane
+from sphere_piles import box_pile
 
 
 @pytest.fixture(autouse=True)
@@ -30,20 +31,6 @@ def _needs_buffer_textures(gpu):
 def stepper(world, **options):
     from gpu_shader.physics import GpuStepper            # needs moderngl
     return GpuStepper(world, **options)
-
-
-def pile(count: int, seed: int = 0) -> physics.World:
-    """``count`` spheres of radii 4 to 8 cm thrown into a 1.2 m square box from up to 0.5 m:
-    dense, so they pile up within 40 steps (float32, simultaneous solver)."""
-    rng = np.random.default_rng(seed)
-    world = physics.World(solver="simultaneous", dtype="float32", seed=seed)
-    world.add_plane((0, 1, 0), 0, friction=0.4)
-    for normal in [(1, 0, 0), (-1, 0, 0), (0, 0, 1), (0, 0, -1)]:
-        world.add_plane(normal, -0.6, friction=0.4)
-    centre = rng.uniform((-0.5, 0.1, -0.5), (0.5, 0.5, 0.5), (count, 3))
-    world.add_spheres(centre, velocities=rng.normal(0, 1, (count, 3)),
-                      radius=rng.uniform(0.04, 0.08, count), restitution=0.3, friction=0.4)
-    return world
 
 
 def _state(world):
@@ -63,7 +50,7 @@ def _assert_same_steps(runs):
 def test_texel_reads_step_a_pile_bit_for_bit_as_storage_buffer_reads():
     runs = []
     for texel_reads in (True, False):
-        world = pile(300)
+        world = box_pile(300, height=0.5)        # dense: it piles up within 40 steps
         step = stepper(world, texel_reads=texel_reads)
         assert step.texel_reads is texel_reads
         step(40)
@@ -134,10 +121,10 @@ def test_buffer_texture_hands_a_shader_every_32_bit_pattern_unchanged():
 def test_stepper_reads_storage_buffers_where_buffer_textures_cannot_be_made(monkeypatch):
     from gpu_shader import buffer_texture
     monkeypatch.setattr(buffer_texture, "available", lambda ctx: False)
-    step = stepper(pile(20))
+    step = stepper(box_pile(20))
     assert step.texel_reads is False and step.texels == {}
     step(2)
     step.release()
     with pytest.raises(physics.PhysicsError, match="texel_reads: this context cannot") as error:
-        stepper(pile(20), texel_reads=True)
+        stepper(box_pile(20), texel_reads=True)
     assert "\n" not in str(error.value)
