@@ -18,6 +18,7 @@ mass: the solvers then treat plane, shape and sphere contacts with the same form
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -133,7 +134,8 @@ def spread_coincident(existing, new, distance, rng) -> np.ndarray:
             new[row] = new[row] + distance[row] * direction / np.sqrt(direction @ direction)
 
 
-def find_contacts(world, reach: float, counter=None, shapes=None) -> Contacts:
+def find_contacts(world, reach: float, counter=None, shapes=None,
+                  neighbours=None) -> Contacts:
     """Every contact with gap <= ``reach`` (m) among the active spheres of ``world``.
 
     Plane contacts come first, ordered by (sphere, plane), then shape contacts ordered by
@@ -143,6 +145,8 @@ def find_contacts(world, reach: float, counter=None, shapes=None) -> Contacts:
     the contacts of its nearest neighbours along a Morton curve, so the work stays bounded
     (crowds.py). ``counter``: see `broadphase.find_pairs`. ``shapes``: the world's shapes
     where they are now (`physics.colliders.Shape.at`); default ``world.shapes``.
+    ``neighbours``: a `broadphase.NeighbourList` kept from step to step (the same pairs,
+    found with less work), or None.
     """
     n = world.count
     dtype = world.dtype
@@ -157,7 +161,9 @@ def find_contacts(world, reach: float, counter=None, shapes=None) -> Contacts:
     (shape_a, shape_index, slot, shape_normal, shape_gap, shape_e, shape_mu,
      shape_velocity) = _shape_contacts(world, shapes, alive, reach)
 
-    i, j = find_pairs(x[alive], r[alive] + 0.5 * reach, CROWD_WINDOW, counter)
+    pairs = find_pairs if neighbours is None else functools.partial(neighbours.find_pairs,
+                                                                    bodies=alive)
+    i, j = pairs(x[alive], r[alive] + 0.5 * reach, CROWD_WINDOW, counter)
     a, b = alive[i], alive[j]
     normal, distance = sphere_sphere_normals(x, a, b)
     gap = distance - (r[a] + r[b])

@@ -14,6 +14,7 @@ from collections import Counter
 
 import numpy as np
 
+from physics.broadphase import NeighbourList
 from physics.contacts import find_contacts, spread_coincident
 from physics.colliders import Shape
 from physics.convex import ConvexSolid
@@ -105,6 +106,7 @@ class World:
         self.shapes: list[Shape] = []     # static solids given by their SDF (colliders.py)
         self._events = []
         self._resting_impulses = None     # (keys, normal, tangent) of last step's contacts
+        self._neighbours = NeighbourList()  # the broad phase's pairs, kept between steps
         self.work = Counter()             # what the last step did: see `World.step`
 
     # --- building -----------------------------------------------------------------------
@@ -473,7 +475,7 @@ class World:
         # plane: bouncing it here, a little above the plane, would use the wrong speed.
         work = Counter()
         shapes = [shape.at(self.time) for shape in self.shapes]   # kinematic ones placed now
-        contacts = find_contacts(self, self.slop, work, shapes)
+        contacts = find_contacts(self, self.slop, work, shapes, self._neighbours)
         approach = -dot(contacts.normal, v_old[contacts.a] - contacts.surface_velocity)
         # (Only a still surface: the continuous test does not follow a moving one.)
         still = ~np.any(contacts.surface_velocity != 0, axis=1)
@@ -547,7 +549,8 @@ class World:
         v_new[bounced] = (end_velocity[bounced]
                           - (scheme.weight - 0.5) * h * end_acceleration[bounced])
         # ... and stop spheres at their first touch with another.
-        stop_sphere_sweeps(x_old, x_new, self.radius, self.spheres, self.slop, work)
+        stop_sphere_sweeps(x_old, x_new, self.radius, self.spheres, self.slop, work,
+                           self._neighbours)
         # ... and sweep the boxes and capsules (solid_sweeps.py).
         solid_hits = []
         if len(solids):
