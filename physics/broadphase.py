@@ -133,13 +133,15 @@ class NeighbourList:
         return _close(centre, reach, i, j)
 
     def _still_holds(self, centre, reach, bodies) -> bool:
-        if self._bodies is None or not np.array_equal(bodies, self._bodies):
+        if self._bodies is None or len(bodies) != len(self._bodies):
+            return False
+        if not (bodies == self._bodies).all():
             return False
         moved = centre - self._centre                   # in float64: c0 is
         moved *= moved
         distance = np.sqrt(moved[:, 0] + moved[:, 1] + moved[:, 2])
         # NaN (a body gone astray) fails the test, and the list is made again.
-        return bool(np.all(distance + reach <= self._bound))
+        return bool((distance + reach <= self._bound).all())
 
     def _make(self, centre, reach, bodies) -> bool:
         """Make the list for these bodies; False (and no list) where a reach is not finite,

@@ -73,8 +73,11 @@ class Contacts:
         return len(self.a)
 
     def select(self, keep: np.ndarray) -> "Contacts":
-        """The contacts where ``keep`` (K,) is True, in the same order."""
+        """The contacts where ``keep`` (K,) is True, in the same order (these very arrays,
+        not copies, where every one is kept)."""
         index = np.flatnonzero(keep)        # taken once, for all thirteen fields (`take`)
+        if len(index) == len(self):
+            return self
         return Contacts(**{name: value.take(index, axis=0) for name, value in vars(self).items()})
 
     @property

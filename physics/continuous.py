@@ -37,7 +37,6 @@ import numpy as np
 
 from physics.broadphase import CROWD_WINDOW, find_pairs
 from physics.colliders import SAME_SURFACE, first_shape_hit, parabola, surface_near
-from physics.contacts import sphere_plane_gaps
 from physics.impulses import collision_impulse, cross, effective_masses
 
 SKIN_SLOPS = 4      # the skin of a touching shape, in slops (see bounce_off_statics)
@@ -172,9 +171,10 @@ def bounce_off_statics(world, start, u, acceleration, spin, skip, h, landing=Non
 def _plane_times(world, position, velocity, acceleration, remaining, skip):
     """(N, P): each body's first time of impact with each plane, +inf for none or skipped."""
     normal, offset = world.plane_normal, world.plane_offset
-    gap = sphere_plane_gaps(position, world.radius, normal, offset)
-    speed = dot(velocity[:, None, :], normal[None, :, :])
-    accel = dot(acceleration[:, None, :], normal[None, :, :])
+    # n.x, n.u and n.A of every body and plane in one product, (3, N, P)
+    along, speed, accel = dot(np.stack([position, velocity, acceleration])[:, :, None, :],
+                              normal)
+    gap = along - offset - world.radius[:, None]        # contacts.sphere_plane_gaps
     return np.where(skip | (gap < 0), np.inf,
                     first_plane_hit(np.maximum(gap, 0), speed, accel, remaining[:, None]))
 

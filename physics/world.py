@@ -478,7 +478,7 @@ class World:
         contacts = find_contacts(self, self.slop, work, shapes, self._neighbours)
         approach = -dot(contacts.normal, v_old[contacts.a] - contacts.surface_velocity)
         # (Only a still surface: the continuous test does not follow a moving one.)
-        still = ~np.any(contacts.surface_velocity != 0, axis=1)
+        still = ~(contacts.surface_velocity != 0).any(axis=1)
         arriving = contacts.static & still & (contacts.gap >= 0) & (
             approach > self.restitution_threshold)
         # An arriving face of a shape is met on its tangent plane (bounce_off_statics).
