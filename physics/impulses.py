@@ -173,7 +173,7 @@ def friction_impulse(v_tangent: np.ndarray, k_tangent, limit) -> np.ndarray:
 
 
 def collision_impulse(v_rel, normal, gravity_part, restitution, friction, k_normal, k_tangent,
-                      threshold, u=None):
+                      threshold, u=None, approach=None):
     """The impulse of one collision, from the current relative velocity.
 
     Parameters
@@ -193,8 +193,8 @@ def collision_impulse(v_rel, normal, gravity_part, restitution, friction, k_norm
     threshold : float
         Approach speeds below this (m/s) do not bounce: the restitution threshold that lets
         resting contact rest.
-    u : (K,), optional
-        n . v_rel, where the caller has worked it out already (m/s).
+    u, approach : (K,), optional
+        n . v_rel and gravity_part - u, where the caller has worked them out already (m/s).
 
     Returns
     -------
@@ -206,7 +206,7 @@ def collision_impulse(v_rel, normal, gravity_part, restitution, friction, k_norm
         Approach speed -n.v_rel before this step's gravity (m/s); positive means approaching.
     """
     u = dot(v_rel, normal) if u is None else u
-    approach = gravity_part - u
+    approach = gravity_part - u if approach is None else approach
     colliding = approach > threshold
     # The normal velocity afterwards is e times the approach speed, leaving: solve for j.
     j = np.where(colliding, (restitution * approach - u) / k_normal, 0)
@@ -231,6 +231,8 @@ class ContactRows:
     ----------
     a, b : (K,) int
         The bodies.
+    both : (2 K,) int
+        a then b, one array (to count each body's contacts with one `np.bincount`).
     radius_a, radius_b : (K, 3)
         The lever arms r_a and r_b (m), one column each for x, y and z, so that r w is a
         product of equal shapes, NumPy's fastest.
@@ -247,6 +249,7 @@ class ContactRows:
     """
     a: np.ndarray
     b: np.ndarray
+    both: np.ndarray
     radius_a: np.ndarray
     radius_b: np.ndarray
     normal: np.ndarray
@@ -265,7 +268,7 @@ def contact_rows(bodies: SolverBodies, a, b, radius_a, radius_b, normal) -> Cont
     flat = (body + np.tile(np.arange(6), 2)[:, None] * len(im)).reshape(-1)
     lever = lambda r: columns(np.repeat(r[:, None], 3, axis=1))       # noqa: E731
     normal = columns(normal)
-    return ContactRows(a, b, lever(radius_a), lever(radius_b), normal,
+    return ContactRows(a, b, np.concatenate([a, b]), lever(radius_a), lever(radius_b), normal,
                        cross_columns(normal, "p"), cross_columns(normal, "q"), flat, scale)
 
 

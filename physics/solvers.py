@@ -149,7 +149,7 @@ def solve_simultaneous(bodies: SolverBodies, contacts, gravity_part, h, threshol
             break
         collisions.append(hit)
 
-    share = _count(bodies, contacts.a, contacts.b)
+    share = _count(bodies, rows.both)
     k_normal, k_tangent = _masses(bodies, contacts, share)
     normal_total, tangent_total = warm
     _apply_warm_start(bodies, contacts, normal_total, tangent_total, rows)
@@ -254,10 +254,12 @@ def _masses(bodies, contacts, share):
     return effective_masses(im[a], im[b], ii[a], ii[b], contacts.radius_a, contacts.radius_b)
 
 
-def _count(bodies, a, b):
-    """How many of the given contacts each body (row) is in, as the solver's float dtype."""
-    return np.bincount(np.concatenate([a, b]),
-                       minlength=len(bodies.velocity)).astype(bodies.velocity.dtype)
+def _count(bodies, both, which=None):
+    """How many contacts each body (row) is in, as the solver's float dtype: of contacts
+    between a and b, ``both`` is a then b (2K,); ``which`` (2K,) bool, if given, counts only
+    the contacts it marks (twice over: for a, then for b)."""
+    return np.bincount(both, which, minlength=len(bodies.velocity)).astype(
+        bodies.velocity.dtype)
 
 
 def _collide_together(bodies, contacts, gravity_part, threshold, rows):
@@ -271,18 +273,20 @@ def _collide_together(bodies, contacts, gravity_part, threshold, rows):
     each sweep, some 30 NumPy calls: with ~150 contacts a call costs about the same for all
     of them as for the few that collide (a fifth, in a pile).
     """
-    a, b, n = contacts.a, contacts.b, contacts.normal
+    n = contacts.normal
     v_rel = relative_velocity(bodies, rows, contacts.surface_velocity)
     u = dot(v_rel, n)
-    colliding = gravity_part - u > threshold
+    approach = gravity_part - u
+    colliding = approach > threshold
     if not colliding.any():
         return None
     # A body in no colliding contact keeps share 1: its contacts' impulses are zero whatever
     # their k, and k must not be 0.
-    share = np.maximum(_count(bodies, a[colliding], b[colliding]), 1)
+    share = np.maximum(_count(bodies, rows.both, np.tile(colliding, 2)), 1)
     k_normal, k_tangent = _masses(bodies, contacts, share)
     impulse, j, approach = collision_impulse(v_rel, n, gravity_part, contacts.restitution,
-                                             contacts.friction, k_normal, k_tangent, threshold, u)
+                                             contacts.friction, k_normal, k_tangent, threshold, u,
+                                             approach)
     hit = (j > 0).nonzero()[0]
     if not len(hit):
         return None
@@ -301,7 +305,7 @@ def _collide(bodies, contacts, index, rows, gravity_part, k_normal, k_tangent, t
     bodies are ``rows``, `_level_rows`), applied; None if none of them collides."""
     a, b, n = contacts.a[index], contacts.b[index], rows.normal
     ra, rb = contacts.radius_a[index], contacts.radius_b[index]
-    v_rel = relative_velocity(bodies, rows, take_rows(contacts.surface_velocity, index))
+    v_rel = relative_velocity(bodies, rows, _surface(contacts, index))
     impulse, j, approach = collision_impulse(
         v_rel, n, gravity_part[index], contacts.restitution[index], contacts.friction[index],
         k_normal[index], k_tangent[index], threshold)
@@ -324,9 +328,17 @@ def _apply_warm_start(bodies, contacts, normal_total, tangent_total, rows):
 
 def _in_columns(contacts):
     """``contacts`` with its (K, 3) arrays stored column by column (`impulses.columns`), as
-    the solvers' arithmetic runs fastest."""
+    the solvers' arithmetic runs fastest; surface_velocity None where every surface is still
+    (subtracting its zeros changes no velocity: it would only cost a NumPy call a pass)."""
+    moving = contacts.surface_velocity.any()
     return replace(contacts, normal=columns(contacts.normal),
-                   surface_velocity=columns(contacts.surface_velocity))
+                   surface_velocity=columns(contacts.surface_velocity) if moving else None)
+
+
+def _surface(contacts, index):
+    """The surface velocities (K, 3) of contacts ``index``, None where all are still."""
+    surface = contacts.surface_velocity
+    return None if surface is None else take_rows(surface, index)
 
 
 def _level_rows(bodies, contacts, index):
@@ -346,7 +358,7 @@ def _rest(bodies, contacts, index, target, k_normal, k_tangent, normal_total, ta
     n = rows.normal
     if len(n) == 0:
         return 0.0
-    v_rel = relative_velocity(bodies, rows, take_rows(contacts.surface_velocity, index))
+    v_rel = relative_velocity(bodies, rows, _surface(contacts, index))
     normal_part, tangent_part = normal_total[index], take_rows(tangent_total, index)
     impulse = contact_impulse(v_rel, n, target[index], contacts.friction[index],
                               k_normal[index], k_tangent[index], normal_part, tangent_part)
