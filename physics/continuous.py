@@ -142,7 +142,9 @@ def bounce_off_statics(world, start, u, acceleration, spin, skip, h, landing=Non
         # A shape's face has the normal found where it was met (the gradient at the centre
         # gives the nearest face, which may be another one the ball already touches).
         on_shape = static >= planes
-        n_s[on_shape] = face_normal[body[on_shape], static[on_shape] - planes]
+        met_shape = on_shape.any()          # (most steps of most scenes: planes only)
+        if met_shape:
+            n_s[on_shape] = face_normal[body[on_shape], static[on_shape] - planes]
         approach, j = _impact(world, body, n_s, e_s, mu_s, v_s, velocity, spin)
         hits.append((body, static, approach, j))
         # If the ball would fall back through the surface before the step ends, it has landed:
@@ -156,13 +158,14 @@ def bounce_off_statics(world, start, u, acceleration, spin, skip, h, landing=Non
         bounced[body] = True
         # The ball now touches what it met: a plane is skipped, a shape's face rests.
         skip[body[~on_shape], static[~on_shape]] = True
-        met = np.zeros((n, len(shapes)), bool)
-        met[body[on_shape], static[on_shape] - planes] = True
-        keep = ~met[landing[0], landing[1]]
-        landing = tuple(part[keep] for part in landing)
-        resting = (np.concatenate([resting[0], body[on_shape]]),
-                   np.concatenate([resting[1], static[on_shape] - planes]),
-                   np.concatenate([resting[2], n_s[on_shape]]))
+        if met_shape:
+            met = np.zeros((n, len(shapes)), bool)
+            met[body[on_shape], static[on_shape] - planes] = True
+            keep = ~met[landing[0], landing[1]]
+            landing = tuple(part[keep] for part in landing)
+            resting = (np.concatenate([resting[0], body[on_shape]]),
+                       np.concatenate([resting[1], static[on_shape] - planes]),
+                       np.concatenate([resting[2], n_s[on_shape]]))
     left = (h - elapsed)[:, None]
     end = position + left * velocity + (0.5 * left * left) * acceleration
     return bounced, end, velocity + left * acceleration, acceleration, hits
