@@ -32,7 +32,7 @@ from scene_model.timeline import check_keyframes
 from .budget import (COMMAND_LINE, MAX_BENCH_RAY_STEPS, check, check_animation, check_image,
                      check_render, check_truth)
 from .outputs import check_outputs, make_folders
-from .render import BACKENDS, backend_problem, reference_backend, render
+from .render import BACKENDS, backend_problem, check_backend, reference_backend, render
 
 OUTPUT_SUFFIXES = (".png", ".npz")
 
@@ -44,6 +44,12 @@ def refuse_empty_paths(args, *options: str) -> None:
         value = getattr(args, option.lstrip("-"), None)
         if value is not None and not value.strip():
             raise MarchlabError(f"{option}: an empty path (name a file or a folder)")
+
+
+def given(scene: str, *options: tuple[str, str | None]) -> str:
+    """``scene: --flag value ...`` for the options given a value, the start of a refusal."""
+    typed = " ".join(f"{flag} {value}" for flag, value in options if value)
+    return f"{scene}: {typed}" if typed else scene
 
 
 @contextmanager
@@ -69,7 +75,11 @@ def cmd_render(args) -> int:
         raise MarchlabError(f"{output}: {drawn[0]} draws on a picture: write a .png")
     check_outputs(files=[output])
     scene = load_scene(args.scene, args.set)
-    args.backend = args.backend or reference_backend(scene)
+    # A backend that cannot draw this scene: the refusal names the file and what was typed.
+    with about_options(given(args.scene, ("--backend", args.backend),
+                             ("--precision", args.precision))):
+        args.backend = args.backend or reference_backend(scene)
+        check_backend(scene, args.backend, args.precision)
     selected = outlined_ids(scene, args.outline)
     width, height = args.size
     with about_options(f"--size {width}x{height}"):
@@ -174,6 +184,7 @@ def cmd_compare(args) -> int:
     refuse_empty_paths(args, "--save")
     check_outputs(folders=[args.save])
     scene = load_scene(args.scene, args.set)
+    typed = {"a": (args.a, args.a_precision), "b": (args.b, args.b_precision)}
     args.a = args.a or reference_backend(scene)
     args.b = args.b or ("raster" if scene.meshes else "gpu")
     width, height = args.size
@@ -183,6 +194,10 @@ def cmd_compare(args) -> int:
     b_precision = args.b_precision or BACKENDS[args.b].precisions[0]
     a_precision = args.a_precision or (
         b_precision if b_precision in BACKENDS[args.a].precisions else None)
+    for side, backend, precision in (("a", args.a, a_precision), ("b", args.b, b_precision)):
+        with about_options(given(args.scene, (f"--{side}", typed[side][0]),
+                                 (f"--{side}-precision", typed[side][1]))):
+            check_backend(scene, backend, precision)
     # Path labels tell the gates where either image may jump (marchlab.compare).
     frames = []
     with progress_bar(2 * width * height) as progress:

@@ -86,6 +86,25 @@ def render(scene: Scene, width: int, height: int, backend: str = "numpy",
     MarchlabError
         An unknown backend or precision, a bad size, a job over the budget (`BudgetError`).
     """
+    precision = check_backend(scene, backend, precision)
+    check_image_size(width, height, allow_large)
+    check_render(scene, width, height, allow_large=allow_large)
+    from .light_check import lights_inside
+    for line in lights_inside(scene):               # the image would hide it: say so
+        warnings.warn(line, stacklevel=2)
+    module = importlib.import_module(BACKENDS[backend].module)
+    # Backends draw objects only: the bodies become spheres after the scene's objects.
+    return module.render(rendered_scene(scene), width, height, precision=precision,
+                         progress=progress, path_labels=path_labels)
+
+
+def check_backend(scene: Scene, backend: str, precision: str | None = None) -> str:
+    """The precision ``backend`` draws ``scene`` in (its first where ``precision`` is None);
+    a `MarchlabError` where the backend or precision is unknown, the backend does not
+    render in that precision, or it cannot draw this scene (triangle meshes on a sphere
+    tracer, SDF objects on a rasteriser).
+
+    The command line calls it before anything runs, to begin the refusal with the scene file."""
     if backend not in BACKENDS:
         raise MarchlabError(f"unknown backend {backend!r} (available: {', '.join(BACKENDS)})")
     precision = precision or BACKENDS[backend].precisions[0]
@@ -95,21 +114,16 @@ def render(scene: Scene, width: int, height: int, backend: str = "numpy",
         raise MarchlabError(f"the {backend} backend renders in "
                             f"{' or '.join(BACKENDS[backend].precisions)} only "
                             f"(asked for {precision})")
-    check_image_size(width, height, allow_large)
     if not isinstance(scene, Scene):
         raise MarchlabError(f"scene must be a marchlab.Scene (got {type(scene).__name__}); "
                             "use marchlab.load_scene(name_or_path)")
     if scene.meshes and backend not in MESH_BACKENDS:
         raise MarchlabError(f"this scene is made of triangle meshes, which the {backend} "
-                            f"backend does not draw: use --backend {', '.join(MESH_BACKENDS)}")
-    check_render(scene, width, height, allow_large=allow_large)
-    from .light_check import lights_inside
-    for line in lights_inside(scene):               # the image would hide it: say so
-        warnings.warn(line, stacklevel=2)
-    module = importlib.import_module(BACKENDS[backend].module)
-    # Backends draw objects only: the bodies become spheres after the scene's objects.
-    return module.render(rendered_scene(scene), width, height, precision=precision,
-                         progress=progress, path_labels=path_labels)
+                            f"backend does not draw: draw it with {', '.join(MESH_BACKENDS)}")
+    if backend in MESH_BACKENDS:        # SDF objects, or the sphere tracer's own settings
+        from reference_cpu.raster_render import check_mesh_scene
+        check_mesh_scene(scene, backend)
+    return precision
 
 
 def reference_backend(scene: Scene) -> str:

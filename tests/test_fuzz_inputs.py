@@ -153,6 +153,16 @@ FIRST_SEEN = {
         in_file("bounce", (("bodies", 0, "radius"), "1e-300")), True),
     "a field of view written as a string": (
         RENDER, in_file("classroom", (("camera", "fov"), '"50"')), True),
+    # found by a run of benchmarks/fuzz_inputs.py with --seed 2711 (the refusals named no file)
+    "a scene file of triangle meshes on the gpu backend": (
+        RENDER + ("--backend", "gpu"), in_file("meshes"), True),
+    "a scene file of triangle meshes in float32": (
+        RENDER + ("--precision", "float32"), in_file("meshes"), True),
+    "a scene file of triangle meshes compared on two sphere tracers": (
+        ("compare", "scene.toml", "--a", "numpy", "--b", "gpu", "--size", "16x12"),
+        in_file("meshes"), True),
+    "a scene file of SDF objects on the raster backend": (
+        RENDER + ("--backend", "raster"), in_file("classroom"), True),
 }
 
 
@@ -161,7 +171,8 @@ def test_each_input_that_first_showed_a_gap_keeps_the_promise(name, tmp_path):
     argv, scene_text, must_refuse = FIRST_SEEN[name]
     names = ["--set", "--size", "--seconds", "--fps", "--save", "--csv", "--output", "--images",
              "--repeat", "x" * 300, "a_file",
-             "a_folder", "physics.dt", "render", "objects", "camera", "lights", "bodies"]
+             "a_folder", "physics.dt", "render", "objects", "camera", "lights", "bodies",
+             "--backend", "--precision", "--a", "--b"]
     case = Case(name, argv, name, tuple(names), "scene.toml" if scene_text else "",
                 scene_text, must_refuse,
                 REFUSAL_TIME_LIMIT if " ".join(argv[:2]) in ONLY_REFUSALS else TIME_LIMIT)
