@@ -94,6 +94,9 @@ def load_scene(name_or_path: str | os.PathLike, overrides: list[str] = ()) -> Sc
                          f"at offset {err.start})", (), source) from None
     except OSError as err:
         raise SceneError(f"cannot read: {err.strerror}", (), source) from None
+    if not data:        # saved before anything was written: not a wish for the defaults
+        raise SceneError("holds no scene (the file is empty, or comments only): write at least "
+                         "a [camera] table or one [[objects]]", (), source)
     try:
         for assignment in overrides:
             apply_override(data, assignment)

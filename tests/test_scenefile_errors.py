@@ -2,7 +2,8 @@
 
 The message is ``FILE: FIELD.PATH: problem``, the path being the one a user sees in the file
 (``objects[1].children[0].radius``, ``objects[0].scale``); a missing file, a TOML syntax error,
-text that is not UTF-8, a folder and a missing default material are named the same way.
+text that is not UTF-8, a file with no scene in it, a folder and a missing default material are
+named the same way.
 """
 
 from __future__ import annotations
@@ -219,6 +220,17 @@ def test_a_file_that_is_not_utf8_is_refused_in_one_line(tmp_path):
     with pytest.raises(SceneError) as caught:
         load_scene(path)
     assert str(caught.value) == f"{path}: not UTF-8 text, as TOML requires (byte 0xe9 at offset 18)"
+
+
+@pytest.mark.parametrize("text", ["", "\n\n", "# a scene, one day\n"])
+def test_a_file_with_no_scene_in_it_is_refused_in_one_line(tmp_path, text):
+    # An empty file is a file saved too soon, not a wish for the default scene.
+    path = tmp_path / "empty.toml"
+    path.write_text(text)
+    with pytest.raises(SceneError) as caught:
+        load_scene(path)
+    assert str(caught.value) == (f"{path}: holds no scene (the file is empty, or comments "
+                                 "only): write at least a [camera] table or one [[objects]]")
 
 
 def test_a_folder_is_not_taken_for_a_scene(tmp_path):
