@@ -216,7 +216,8 @@ class GpuStepper:
             if storage < STORAGE_BUFFERS:
                 raise PhysicsError(f"the gpu physics step needs {STORAGE_BUFFERS} storage "
                                    f"buffers in a compute shader; this GPU allows {storage}")
-            contact_texels = 2 * n * MAX_CONTACTS * CONTACT_BYTES // buffer_texture.TEXEL_BYTES
+            contact_bytes = 2 * n * MAX_CONTACTS * CONTACT_BYTES     # two steps' lists
+            contact_texels = contact_bytes // buffer_texture.TEXEL_BYTES
             possible = (buffer_texture.available(self.ctx)
                         and contact_texels <= buffer_texture.max_texels(self.ctx))
             self.texel_reads = possible if texel_reads is None else bool(texel_reads)
@@ -227,7 +228,7 @@ class GpuStepper:
                 shader_source(shapes.source, stage, self.texel_reads)) for stage in STAGES}
             self.bodies = self.ctx.buffer(upload_bodies(world).tobytes())
             self.motion = self.ctx.buffer(reserve=2 * n * MOTION_BYTES)
-            self.contacts = self.ctx.buffer(reserve=2 * n * MAX_CONTACTS * CONTACT_BYTES)
+            self.contacts = self.ctx.buffer(reserve=contact_bytes)
             self.planes = self.ctx.buffer(upload_planes(world).tobytes())
             # zeroed: the event count and the overflow flag are only ever added to (a reserved
             # buffer may hold what a released one left, as NVIDIA's driver gives it back)

@@ -42,15 +42,20 @@ CLASS_RATIO = 4.0   # the reaches of a size class span a factor of 4 (16 around 
 CROWD_WINDOW = 12   # in a crowd, each body is paired with its next 12 along a Morton curve
 
 
-def find_pairs(centre: np.ndarray, reach: np.ndarray, crowd_window=None, counter=None):
+def find_pairs(centre: np.ndarray, reach: np.ndarray, crowd_window=None, counter=None,
+               neighbours=None, bodies=None):
     """Pairs (i < j) whose bounding spheres touch: brute force for a few bodies (less overhead),
     the grid from SMALL_SCENE bodies on. Same answer either way; see `brute_force_pairs`.
 
     ``crowd_window`` (an int) bounds the work where bodies crowd into a cell, and ``counter``
     (a collections.Counter) gets the number of candidate pairs tested added to its
-    ``"pairs examined"``; see `grid_pairs`.
+    ``"pairs examined"``; see `grid_pairs`. ``neighbours``, a `NeighbourList` kept from step
+    to step, does the brute force's work with fewer tests; ``bodies`` (N,) int names the bodies
+    the rows of ``centre`` are, so that a list made for others is not used.
     """
     if len(centre) < SMALL_SCENE:
+        if neighbours is not None:
+            return neighbours.pairs(centre, reach, counter, bodies)
         if counter is not None:
             counter["pairs examined"] += len(centre) * (len(centre) - 1) // 2
         return brute_force_pairs(centre, reach)
@@ -102,8 +107,8 @@ class NeighbourList:
     of bodies, makes the list afresh.
 
     A world steps its contacts and its swept test through one list (both ask about spheres
-    near each other, the swept test about their paths). From SMALL_SCENE bodies on it hands
-    over to the grid (`find_pairs`), which finds pairs in ~O(N) anyway.
+    near each other, the swept test about their paths), given to `find_pairs`: from
+    SMALL_SCENE bodies on that uses the grid instead, which finds pairs in ~O(N) anyway.
     """
 
     def __init__(self):
@@ -112,15 +117,13 @@ class NeighbourList:
         self._bound = None       # (N,) float64: R0 + s, less a margin for rounding
         self._pairs = None       # (i, j): every pair within the lengthened reaches
 
-    def find_pairs(self, centre, reach, crowd_window=None, counter=None, bodies=None):
-        """The same pairs as `find_pairs` (i < j, sorted by i then j).
+    def pairs(self, centre, reach, counter=None, bodies=None):
+        """The same pairs as `brute_force_pairs` (i < j, sorted by i then j).
 
         ``bodies`` (N,) int names the bodies the rows of ``centre`` are (the world's alive
-        spheres): a list made for other bodies is not used.
+        spheres): a list made for other bodies is not used. ``counter``: see `find_pairs`.
         """
         n = len(centre)
-        if n >= SMALL_SCENE:
-            return find_pairs(centre, reach, crowd_window, counter)
         bodies = np.arange(n) if bodies is None else bodies
         if not self._still_holds(centre, reach, bodies):
             if counter is not None:

@@ -18,7 +18,6 @@ mass: the solvers then treat plane, shape and sphere contacts with the same form
 
 from __future__ import annotations
 
-import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -164,9 +163,7 @@ def find_contacts(world, reach: float, counter=None, shapes=None,
     (shape_a, shape_index, slot, shape_normal, shape_gap, shape_e, shape_mu,
      shape_velocity) = _shape_contacts(world, shapes, alive, reach)
 
-    pairs = find_pairs if neighbours is None else functools.partial(neighbours.find_pairs,
-                                                                    bodies=alive)
-    i, j = pairs(x[alive], r[alive] + 0.5 * reach, CROWD_WINDOW, counter)
+    i, j = find_pairs(x[alive], r[alive] + 0.5 * reach, CROWD_WINDOW, counter, neighbours, alive)
     a, b = alive[i], alive[j]
     normal, distance = sphere_sphere_normals(x, a, b)
     gap = distance - (r[a] + r[b])

@@ -31,12 +31,11 @@ collision at the start of the next step, so it can happen up to one step late.
 
 from __future__ import annotations
 
-import functools
-
 import numpy as np
 
 from physics.broadphase import CROWD_WINDOW, find_pairs
 from physics.colliders import SAME_SURFACE, first_shape_hit, parabola, surface_near
+from physics.contacts import sphere_plane_gaps
 from physics.impulses import collision_impulse, cross, effective_masses
 
 SKIN_SLOPS = 4      # the skin of a touching shape, in slops (see bounce_off_statics)
@@ -174,10 +173,9 @@ def bounce_off_statics(world, start, u, acceleration, spin, skip, h, landing=Non
 def _plane_times(world, position, velocity, acceleration, remaining, skip):
     """(N, P): each body's first time of impact with each plane, +inf for none or skipped."""
     normal, offset = world.plane_normal, world.plane_offset
-    # n.x, n.u and n.A of every body and plane in one product, (3, N, P)
-    along, speed, accel = dot(np.stack([position, velocity, acceleration])[:, :, None, :],
-                              normal)
-    gap = along - offset - world.radius[:, None]        # contacts.sphere_plane_gaps
+    gap = sphere_plane_gaps(position, world.radius, normal, offset)
+    # n.u and n.A of every body and plane in one product, (2, N, P)
+    speed, accel = dot(np.stack([velocity, acceleration])[:, :, None, :], normal)
     return np.where(skip | (gap < 0), np.inf,
                     first_plane_hit(np.maximum(gap, 0), speed, accel, remaining[:, None]))
 
@@ -318,10 +316,8 @@ def stop_sphere_sweeps(start, end, radius, active, slop, counter=None, neighbour
         return stopped
     d = end - start
     length = np.sqrt(dot(d, d))
-    pairs = find_pairs if neighbours is None else functools.partial(neighbours.find_pairs,
-                                                                    bodies=alive)
-    i, j = pairs(start[alive] + 0.5 * d[alive], radius[alive] + 0.5 * length[alive],
-                 CROWD_WINDOW, counter)
+    i, j = find_pairs(start[alive] + 0.5 * d[alive], radius[alive] + 0.5 * length[alive],
+                      CROWD_WINDOW, counter, neighbours, alive)
     a, b = alive[i], alive[j]
     p, q = start[a] - start[b], d[a] - d[b]
     reach = radius[a] + radius[b]

@@ -106,7 +106,7 @@ def test_a_kept_neighbour_list_finds_the_brute_force_pairs_exactly_at_every_step
             reach = reach.copy()
             reach[-1] = np.inf
         before = neighbours._pairs
-        found = neighbours.find_pairs(centre, reach, bodies=bodies)
+        found = neighbours.pairs(centre, reach, bodies=bodies)
         kept += before is not None and neighbours._pairs is before
         expected = brute_force_pairs(centre, reach)
         assert all(np.array_equal(f, e) for f, e in zip(found, expected)), step
@@ -126,7 +126,7 @@ def test_a_neighbour_list_is_made_again_before_two_bodies_closing_head_on_can_to
     reach = np.ones(3, dtype)
     neighbours = NeighbourList()
     for step in range(4):
-        found = neighbours.find_pairs(centre, reach)
+        found = neighbours.pairs(centre, reach)
         expected = brute_force_pairs(centre, reach)
         assert all(np.array_equal(f, e) for f, e in zip(found, expected)), step
         centre[0, 0] += 0.36
