@@ -116,7 +116,7 @@ class RasterRenderer:
     def draw_pass(self, shaders: LitShaders, camera: Camera, width: int, height: int, *,
                   target: str = "frame", objects=None, visibility=None, reads=None,
                   uniforms=None, vertex: str = "raster/mesh.vert", clear: bool = True,
-                  sky: bool = True, cull_back_faces: bool = False, front_face: str = "cw",
+                  sky: bool = True, cull_back_faces=False, front_face: str = "cw",
                   query=None, scissor=None):
         """Draw ``objects`` with ``shaders`` into the planes of ``target`` (one set of
         framebuffers per name and size) and return its framebuffer.
@@ -124,8 +124,11 @@ class RasterRenderer:
         ``reads`` maps sampler names to textures the pass reads (bound from `PASS_UNIT`),
         ``uniforms`` holds the pass's other numbers; ``vertex`` is the vertex shader's file.
         With ``clear``, the colour is cleared to the background's and the depth to 1 first;
-        with ``sky``, the skybox fills what no triangle covers. ``front_face`` is the winding
-        of a front face in GL's window ("cw" drawn upside down; "ccw" mirrored as well).
+        with ``sky``, the skybox fills what no triangle covers. ``cull_back_faces``, one bool
+        or (K,) bools, one per mesh, skips the back faces of those meshes
+        (`reference_cpu.back_faces` says when that changes nothing); ``front_face`` is the
+        winding of a front face in GL's window ("cw" drawn upside down; "ccw" mirrored as
+        well).
         A ``query`` (moderngl.Query) counts the samples of the meshes' fragments that pass.
         A ``scissor`` (x, y, w, h) in pixels (GL's window: y is the image's row) limits the
         clear, the meshes and the skybox to that rectangle
@@ -148,17 +151,21 @@ class RasterRenderer:
                 fbo.viewport = (0, 0, width, height)
                 fbo.scissor = scissor
                 ctx.enable(ctx.DEPTH_TEST)
-                if cull_back_faces:
-                    ctx.enable(ctx.CULL_FACE)
-                    ctx.front_face = front_face
+                ctx.front_face = front_face
+                cull = np.broadcast_to(cull_back_faces, (len(self.meshes),))
+                culling = None                  # GL's CULL_FACE as last set in this pass
                 with query or contextlib.nullcontext():
                     for k, rows in enumerate(shaders.materials):
                         if self.buffers[k] is None or (objects is not None and not objects[k]):
                             continue
+                        if cull[k] != culling:
+                            culling = bool(cull[k])
+                            (ctx.enable if culling else ctx.disable)(ctx.CULL_FACE)
                         program["object_id"].value = k
                         if "material" in program:
                             program["material"].write(rows.tobytes())
                         self._vertex_array(program, k).render()
+                ctx.disable(ctx.CULL_FACE)          # the skybox's one triangle faces any way
                 if sky and shaders.sky_source:
                     program = self.program(shaders, camera, width, height, sky=True,
                                            uniforms=uniforms)

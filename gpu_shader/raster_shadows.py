@@ -47,6 +47,7 @@ from itertools import combinations
 
 import numpy as np
 
+from reference_cpu.back_faces import culled_meshes, signed_volume
 from reference_cpu.rasterise import NEAR
 from reference_cpu.shadow_volumes import facing_light, light_source, neighbours
 from scene_model.camera import Camera, camera_basis
@@ -272,6 +273,8 @@ class ShadowVolumes:
         self.ctx, self.z_pass = ctx, z_pass
         self.meshes = [m for m in meshes if len(m.triangles)]
         self.across = [neighbours(m) for m in self.meshes]     # None: open, casts nothing
+        self.solid = [a is not None and signed_volume(m) > 0      # back faces hidden from
+                      for m, a in zip(self.meshes, self.across)]  # outside (back_faces.py)
         self.spheres = [bounding_sphere(m) for m in self.meshes]
         # Bounding boxes, a little larger than the vertices' (rounding): each occluder's, and
         # the receivers' (every mesh drawn), which holds every surface a count is read on.
@@ -301,8 +304,11 @@ class ShadowVolumes:
             scene.clear(depth=1.0)
             ctx.enable(ctx.DEPTH_TEST)
             ctx.front_face = "cw"                  # drawn upside down (gpu_shader/raster.py)
-            for _, _, vao in self.scene:           # every mesh writes depth, closed or not
+            cull = culled_meshes(self.solid, self.boxes, camera, width, height)
+            for (_, _, vao), culled in zip(self.scene, cull):  # every mesh writes depth,
+                (ctx.enable if culled else ctx.disable)(ctx.CULL_FACE)    # closed or not
                 vao.render()
+            ctx.disable(ctx.CULL_FACE)             # a volume's sides count either way
             ctx.enable(ctx.BLEND)
             ctx.blend_func = ctx.ONE, ctx.ONE
             ctx.blend_equation = ctx.FUNC_ADD
@@ -334,7 +340,7 @@ class ShadowVolumes:
         finally:
             for fbo in fbos:
                 fbo.scissor = None
-            ctx.disable(ctx.DEPTH_TEST | ctx.BLEND)
+            ctx.disable(ctx.DEPTH_TEST | ctx.BLEND | ctx.CULL_FACE)
             ctx.depth_func = "<"
             ctx.blend_func = ctx.DEFAULT_BLENDING
             ctx.front_face = "ccw"
