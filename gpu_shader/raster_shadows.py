@@ -304,6 +304,9 @@ class ShadowVolumes:
             scene.clear(depth=1.0)
             ctx.enable(ctx.DEPTH_TEST)
             ctx.front_face = "cw"                  # drawn upside down (gpu_shader/raster.py)
+            # The lit pass culls the same solids' back faces by the same rule
+            # (gpu_shader/raster_render.py), so where a back face would win a silhouette pixel
+            # by rounding, both passes drop it and the counts are taken at the depth shown.
             cull = culled_meshes(self.solid, self.boxes, camera, width, height)
             for (_, _, vao), culled in zip(self.scene, cull):  # every mesh writes depth,
                 (ctx.enable if culled else ctx.disable)(ctx.CULL_FACE)    # closed or not
