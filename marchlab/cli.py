@@ -259,8 +259,9 @@ def build_parser() -> Parser:
     p.add_argument("--frames", type=integer_in(1, 100_000, "a whole number from 1 to 100000"),
                    help="draw this many frames (after the --script), then close")
     p.add_argument("--screenshot", metavar="PATH",
-                   help="with --frames: write the 3D view alone (no panels) at --size as PNG "
-                        "when the window closes")
+                   help="with --frames: write the 3D view alone (no panels) at the window's "
+                        "size (--size, or less where the display is smaller) as PNG when the "
+                        "window closes")
     p.add_argument("--script", metavar="FILE",
                    help="replay the input actions of a TOML script, one per frame "
                         "(docs/viewer.md)")

@@ -475,6 +475,10 @@ def cmd_view(args) -> int:
     if args.screenshot is not None and args.frames is None:
         raise MarchlabError("--screenshot is written when the window closes by itself: "
                             "give --frames N too")
+    width, height = args.size
+    with about_options(f"--size {width}x{height}"):
+        # The view draws a frame of its window's size, as large as a render's.
+        check_image(width, height, lift="ask for a smaller --size")
     check_outputs(files=[args.screenshot])
     from .view import Viewer
     from .view_script import read_script
@@ -487,5 +491,9 @@ def cmd_view(args) -> int:
     window = Window(viewer, frames=args.frames, screenshot=args.screenshot, actions=actions)
     run(window, args.size, title=f"marchlab view {args.scene}")
     if args.screenshot is not None:
-        print(f"wrote {args.screenshot}")
+        # A window is as large as the display lets it be: say so when that was not --size.
+        shown = tuple(viewer.size)
+        smaller = (f" ({shown[0]}x{shown[1]}, the window the display gave, not --size "
+                   f"{width}x{height})" if shown != (width, height) else "")
+        print(f"wrote {args.screenshot}{smaller}")
     return 0

@@ -163,6 +163,10 @@ FIRST_SEEN = {
         in_file("meshes"), True),
     "a scene file of SDF objects on the raster backend": (
         RENDER + ("--backend", "raster"), in_file("classroom"), True),
+    # found by a run with --seed 5151: a view window of 100 million pixels ran (the display
+    # gave a smaller one), where render refuses that size
+    "a view window of 10000 x 10000 pixels": (
+        ("view", "classroom", "--frames", "1", "--size", "10000x10000"), None, True),
 }
 
 

@@ -64,6 +64,21 @@ def test_a_screenshot_of_an_unedited_scene_equals_marchlab_render(window, tmp_pa
     assert np.abs(np.asarray(Image.open(shot)).astype(int) - expected).max() <= 1
 
 
+def test_a_screenshot_larger_than_the_display_says_the_size_it_has(window, tmp_path):
+    # Xvfb's screen here is 1280x1024 (pyproject.toml): the window the display gives is
+    # smaller than --size, and the `wrote` line says what the picture's size is.
+    shot = tmp_path / "view.png"
+    result = subprocess.run([sys.executable, "-m", "marchlab.cli", "view", "classroom",
+                             "--size", "2000x1500", "--frames", "1", "--screenshot", str(shot)],
+                            check=False, capture_output=True, text=True, timeout=120)
+    assert result.returncode == 0, result.stderr
+    from PIL import Image
+    height, width = np.asarray(Image.open(shot)).shape[:2]
+    assert (width, height) != (2000, 1500)
+    assert result.stdout.strip() == (f"wrote {shot} ({width}x{height}, the window the display "
+                                     "gave, not --size 2000x1500)")
+
+
 def test_an_edit_in_the_panel_renders_as_the_edited_scene_file(window, tmp_path):
     arrays, state = in_window("edit", tmp_path)
     assert state["max_steps"] == 24
