@@ -53,12 +53,18 @@ def test_the_window_shows_the_gpu_backends_frame_within_one_level(window, tmp_pa
     assert np.abs(arrays["screen"].astype(int) - expected).max() <= 1
 
 
-def test_a_screenshot_of_an_unedited_scene_equals_marchlab_render(window, tmp_path):
-    shot = tmp_path / "view.png"
+def screenshot(shot: Path, size: str, frames: int) -> subprocess.CompletedProcess:
+    """``marchlab view classroom --size SIZE --frames N --screenshot SHOT``, run to its end."""
     result = subprocess.run([sys.executable, "-m", "marchlab.cli", "view", "classroom",
-                             "--size", "96x72", "--frames", "3", "--screenshot", str(shot)],
+                             "--size", size, "--frames", str(frames), "--screenshot", str(shot)],
                             check=False, capture_output=True, text=True, timeout=120)
     assert result.returncode == 0, result.stderr
+    return result
+
+
+def test_a_screenshot_of_an_unedited_scene_equals_marchlab_render(window, tmp_path):
+    shot = tmp_path / "view.png"
+    screenshot(shot, "96x72", 3)
     from PIL import Image
     expected = render(load_scene("classroom"), 96, 72, backend="gpu").image()
     assert np.abs(np.asarray(Image.open(shot)).astype(int) - expected).max() <= 1
@@ -68,10 +74,7 @@ def test_a_screenshot_larger_than_the_display_says_the_size_it_has(window, tmp_p
     # Xvfb's screen here is 1280x1024 (pyproject.toml): the window the display gives is
     # smaller than --size, and the `wrote` line says what the picture's size is.
     shot = tmp_path / "view.png"
-    result = subprocess.run([sys.executable, "-m", "marchlab.cli", "view", "classroom",
-                             "--size", "2000x1500", "--frames", "1", "--screenshot", str(shot)],
-                            check=False, capture_output=True, text=True, timeout=120)
-    assert result.returncode == 0, result.stderr
+    result = screenshot(shot, "2000x1500", 1)
     from PIL import Image
     height, width = np.asarray(Image.open(shot)).shape[:2]
     assert (width, height) != (2000, 1500)
