@@ -493,7 +493,7 @@ def cmd_view(args) -> int:
     if args.screenshot is not None:
         # A window is as large as the display lets it be: say so when that was not --size.
         shown = tuple(viewer.size)
-        smaller = (f" ({shown[0]}x{shown[1]}, the window the display gave, not --size "
+        smaller = (f" ({shown[0]}x{shown[1]}: the window was that large, not --size "
                    f"{width}x{height})" if shown != (width, height) else "")
         print(f"wrote {args.screenshot}{smaller}")
     return 0

@@ -78,8 +78,8 @@ def test_a_screenshot_larger_than_the_display_says_the_size_it_has(window, tmp_p
     from PIL import Image
     height, width = np.asarray(Image.open(shot)).shape[:2]
     assert (width, height) != (2000, 1500)
-    assert result.stdout.strip() == (f"wrote {shot} ({width}x{height}, the window the display "
-                                     "gave, not --size 2000x1500)")
+    assert result.stdout.strip() == (f"wrote {shot} ({width}x{height}: the window was that "
+                                     "large, not --size 2000x1500)")
 
 
 def test_an_edit_in_the_panel_renders_as_the_edited_scene_file(window, tmp_path):
