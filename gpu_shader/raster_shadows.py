@@ -47,7 +47,7 @@ from itertools import combinations
 
 import numpy as np
 
-from reference_cpu.back_faces import culled_meshes, signed_volume
+from reference_cpu.back_faces import bounds_a_solid, culled_meshes
 from reference_cpu.rasterise import NEAR
 from reference_cpu.shadow_volumes import facing_light, light_source, neighbours
 from scene_model.camera import Camera, camera_basis
@@ -273,7 +273,7 @@ class ShadowVolumes:
         self.ctx, self.z_pass = ctx, z_pass
         self.meshes = [m for m in meshes if len(m.triangles)]
         self.across = [neighbours(m) for m in self.meshes]     # None: open, casts nothing
-        self.solid = [a is not None and signed_volume(m) > 0      # back faces hidden from
+        self.solid = [bounds_a_solid(m, closed=a is not None)     # back faces hidden from
                       for m, a in zip(self.meshes, self.across)]  # outside (back_faces.py)
         self.spheres = [bounding_sphere(m) for m in self.meshes]
         # Bounding boxes, a little larger than the vertices' (rounding): each occluder's, and

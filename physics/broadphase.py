@@ -136,9 +136,7 @@ class NeighbourList:
         return _close(centre, reach, i, j)
 
     def _still_holds(self, centre, reach, bodies) -> bool:
-        if self._bodies is None or len(bodies) != len(self._bodies):
-            return False
-        if not (bodies == self._bodies).all():
+        if self._bodies is None or not np.array_equal(bodies, self._bodies):
             return False
         moved = centre - self._centre                   # in float64: c0 is
         moved *= moved

@@ -42,10 +42,13 @@ def signed_volume(mesh: TriangleMesh) -> float:
     return float(np.sum(a * np.cross(b, c)) / 6.0)
 
 
-def bounds_a_solid(mesh: TriangleMesh) -> bool:
+def bounds_a_solid(mesh: TriangleMesh, closed: bool | None = None) -> bool:
     """Whether ``mesh`` is closed and wound outward, so that its back faces are hidden from
-    any eye outside it."""
-    return len(mesh.triangles) > 0 and neighbours(mesh) is not None and signed_volume(mesh) > 0
+    any eye outside it. ``closed``: whether `neighbours` found it closed, where the caller
+    has asked already (None: ask)."""
+    if closed is None:
+        closed = len(mesh.triangles) > 0 and neighbours(mesh) is not None
+    return closed and signed_volume(mesh) > 0
 
 
 def near_reach(camera: Camera, width: int, height: int, near: float = NEAR) -> float:
